@@ -1,0 +1,1 @@
+"""fourws analysis: linear stability, frequency response, handling, recorded-run analysis (no rclpy)."""

@@ -1,0 +1,1 @@
+"""The `fourws` command line."""

@@ -1,0 +1,68 @@
+"""Entry point of the ``fourws`` command.
+
+Each subcommand is a module ``fourws_cli/cmd_<name>.py`` exposing::
+
+    HELP: str                                   # one line for ``fourws --help``
+    def add_arguments(parser) -> None           # fill its argparse sub-parser
+    def run(args) -> int                        # exit code
+
+Modules are discovered by name, so adding a subcommand is adding one file. User errors
+(:class:`fourws_sim.errors.FourwsError`) become one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+
+import fourws_cli
+from fourws_sim.errors import FourwsError
+
+
+def _commands() -> dict[str, object]:
+    found = {}
+    for info in pkgutil.iter_modules(fourws_cli.__path__):
+        if info.name.startswith("cmd_"):
+            found[info.name[4:].replace("_", "-")] = f"fourws_cli.{info.name}"
+    return dict(sorted(found.items()))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full argument parser (subcommands imported lazily, only their parsers)."""
+    parser = argparse.ArgumentParser(prog="fourws", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, modname in _commands().items():
+        mod = importlib.import_module(modname)
+        p = sub.add_parser(name, help=getattr(mod, "HELP", ""),
+                           description=getattr(mod, "HELP", ""))
+        mod.add_arguments(p)
+        p.set_defaults(_run=mod.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the ``fourws`` command line; returns the exit code."""
+    argv = sys.argv[1:] if argv is None else argv
+    # `fourws node NAME ...` hands everything after NAME to the node untouched (--ros-args ...)
+    if len(argv) >= 1 and argv[0] == "node":
+        from fourws_cli.nodes import run_node
+        return run_node(argv[1:])
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "_run", None):
+        parser.print_help()
+        return 1
+    try:
+        return int(args._run(args) or 0)
+    except FourwsError as exc:
+        print(f"fourws {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"fourws {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

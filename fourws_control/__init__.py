@@ -1,0 +1,1 @@
+"""fourws rear-wheel steering control laws (no rclpy)."""

@@ -1,0 +1,1 @@
+"""fourws simulator core: parameters, tire models, vehicle models, integrators (no rclpy)."""

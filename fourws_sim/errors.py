@@ -1,0 +1,53 @@
+"""Package exceptions of fourws.
+
+Every error a user can cause (a bad file, a bad name, a bad number) is raised as one of
+these. They subclass :class:`ValueError` (or :class:`TypeError`) so callers that do not know
+fourws still catch them; command-line tools and nodes catch :class:`FourwsError` at their
+boundary and print its message, which always names the offending field and, where there is
+one, the file.
+"""
+
+from __future__ import annotations
+
+
+class FourwsError(ValueError):
+    """Base class of every user-facing fourws error."""
+
+
+class ParameterError(FourwsError):
+    """A parameter is missing, unknown, of the wrong type or out of its valid range.
+
+    Parameters
+    ----------
+    field : str
+        Dotted name of the field, e.g. ``"chassis.mass_kg"``.
+    problem : str
+        What is wrong with it.
+    source : str, optional
+        File (or other origin) the value came from.
+    """
+
+    def __init__(self, field: str, problem: str, source: str | None = None) -> None:
+        self.field = field
+        self.problem = problem
+        self.source = source
+        where = f" in {source}" if source else ""
+        super().__init__(f"{field}: {problem}{where}")
+
+
+class UnknownNameError(FourwsError):
+    """A name (model, tire, law, integrator, maneuver, vehicle) is not one of the known ones."""
+
+    def __init__(self, kind: str, name: str, valid: list[str] | tuple[str, ...]) -> None:
+        self.kind = kind
+        self.name = name
+        self.valid = sorted(valid)
+        super().__init__(f"unknown {kind} {name!r}; valid: {', '.join(self.valid)}")
+
+
+class NonFiniteError(FourwsError):
+    """A state, input or result is NaN or infinite."""
+
+
+class IncompatibleError(FourwsError):
+    """Two valid things that do not go together (e.g. a 3-DOF law on a 2-DOF model)."""
