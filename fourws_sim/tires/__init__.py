@@ -1,0 +1,108 @@
+"""Tire models: pure scalar functions that ``numba.njit`` can compile.
+
+Every tire module exposes
+
+``forces(fz_n, alpha_rad, kappa, vx_mps, mu, coeffs) -> (fx_n, fy_n, mz_nm)``
+    tire-frame forces (plain float math: no Python objects, no exceptions inside);
+``pack(vehicle, axle) -> numpy.ndarray``
+    the float64 coefficient array of one tire on ``"front"`` or ``"rear"`` (all validation of
+    coefficient names and values happens here);
+``N_COEFFS`` and an ``IntEnum`` ``COEF`` naming the array slots.
+
+Sign conventions (``docs/architecture.md``): ``Fy = -C_alpha * alpha`` for small slip angle,
+``Fx = +C_s * kappa`` for small slip ratio (positive under drive, -1 locked).
+
+The argument ``mu`` is the road friction coefficient. For ``linear`` it is the absolute peak
+friction; ``sti`` and ``magic_formula`` carry their own (load- and speed-dependent) peak friction
+measured on a test surface, and ``mu`` scales it (1.0 = the test surface).
+"""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+import numpy as np
+
+from fourws_sim.errors import UnknownNameError
+
+#: Tire model name -> module path. Modules are imported on first use.
+_MODULES = {
+    "linear": "fourws_sim.tires.linear",
+    "sti": "fourws_sim.tires.sti",
+    "magic_formula": "fourws_sim.tires.magic_formula",
+}
+
+#: Step of the central difference used by :func:`cornering_stiffness`, rad.
+_STIFFNESS_STEP_RAD = 1.0e-5
+#: Forward speed at which :func:`cornering_stiffness` evaluates the tire, m/s.
+_STIFFNESS_SPEED_MPS = 20.0
+
+
+class _Registry(dict):
+    """Name -> tire module, importing each module lazily on first access."""
+
+    def __missing__(self, name: str) -> ModuleType:
+        if name not in _MODULES:
+            raise UnknownNameError("tire model", name, list(_MODULES))
+        module = importlib.import_module(_MODULES[name])
+        self[name] = module
+        return module
+
+    def __contains__(self, name: object) -> bool:
+        return name in _MODULES
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return iter(_MODULES)
+
+    def __len__(self) -> int:
+        return len(_MODULES)
+
+    def keys(self):  # type: ignore[no-untyped-def]
+        return _MODULES.keys()
+
+    def items(self):  # type: ignore[no-untyped-def]
+        return [(name, self[name]) for name in _MODULES]
+
+    def values(self):  # type: ignore[no-untyped-def]
+        return [self[name] for name in _MODULES]
+
+
+#: Registry of tire models: ``TIRES["sti"].forces(...)``.
+TIRES: dict[str, ModuleType] = _Registry()
+
+
+def get_tire(name: str) -> ModuleType:
+    """Tire module by name.
+
+    Raises
+    ------
+    UnknownNameError
+        If ``name`` is not one of ``linear``, ``magic_formula``, ``sti``.
+    """
+    if name not in _MODULES:
+        raise UnknownNameError("tire model", name, list(_MODULES))
+    return TIRES[name]
+
+
+def cornering_stiffness(name: str, coeffs: np.ndarray, fz_n: float, mu: float = 1.0) -> float:
+    """Small-slip cornering stiffness ``-dFy/dalpha`` at ``alpha = kappa = 0``, in N/rad.
+
+    Numerical central difference of the tire's lateral force (per tire, positive).
+
+    Parameters
+    ----------
+    name : str
+        Tire model name.
+    coeffs : numpy.ndarray
+        The model's coefficient array (from its ``pack``).
+    fz_n : float
+        Normal load in N.
+    mu : float
+        Road friction (does not change the small-slip slope of a physical tire).
+    """
+    forces = get_tire(name).forces
+    h = _STIFFNESS_STEP_RAD
+    _, fy_plus, _ = forces(fz_n, h, 0.0, _STIFFNESS_SPEED_MPS, mu, coeffs)
+    _, fy_minus, _ = forces(fz_n, -h, 0.0, _STIFFNESS_SPEED_MPS, mu, coeffs)
+    return -(fy_plus - fy_minus) / (2.0 * h)
