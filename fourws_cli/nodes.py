@@ -1,0 +1,34 @@
+"""``fourws node NAME [--ros-args ...]``: run one node of the graph in this process.
+
+The same nodes are console scripts of the ament_python package (``ros2 run fourws NAME``);
+in the project venv, where the ``ros2`` CLI does not exist, this is how they are started.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+#: Node name -> module with a ``main(args) -> int``.
+NODES: dict[str, str] = {
+    "simulator": "fourws_ros.simulator_node",
+    "maneuver": "fourws_ros.maneuver_node",
+    "controller": "fourws_ros.controller_node",
+    "recorder": "fourws_ros.recorder_node",
+    "replay": "fourws_ros.replay_node",
+    "example_controller": "fourws_ros.example_controller",
+}
+
+
+def run_node(argv: list[str]) -> int:
+    """Run node ``argv[0]`` with the remaining arguments; returns its exit code."""
+    if not argv or argv[0] in ("-h", "--help"):
+        print("usage: fourws node NAME [--ros-args ...]\nnodes: " + ", ".join(NODES))
+        return 0 if argv else 1
+    name, rest = argv[0], argv[1:]
+    if name not in NODES:
+        print(f"fourws node: error: unknown node {name!r}; valid: {', '.join(NODES)}",
+              file=sys.stderr)
+        return 2
+    module = importlib.import_module(NODES[name])
+    return int(module.main([f"fourws_{name}", *rest]) or 0)

@@ -1,0 +1,111 @@
+"""What every fourws node's ``main()`` shares: init, signals, spinning, clean shutdown.
+
+A node process ends in one of four ways, with a distinct exit code the launcher reports:
+
+* :data:`EXIT_OK` (0) — SIGINT/SIGTERM or the node asked to stop (``node.finished``);
+* :data:`EXIT_USER_ERROR` (2) — a :class:`fourws_sim.errors.FourwsError` at start-up (bad
+  parameter, unknown name, malformed YAML); its message, which names the field, is logged;
+* :data:`EXIT_RUN_STOPPED` (3) — the node stopped the run for a reason of the simulation
+  (non-finite state, ...), given in ``node.stop_reason``;
+* anything else — a crash (Python traceback in the log).
+
+Signals are handled here rather than by rclpy (``SignalHandlerOptions.NO``) so a node can
+finish its work on SIGINT/SIGTERM — the recorder drains its queues and closes the bag — before
+the context shuts down.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from typing import Any, Callable, Sequence
+
+EXIT_OK = 0
+EXIT_CRASH = 1
+EXIT_USER_ERROR = 2
+EXIT_RUN_STOPPED = 3
+
+#: Longest blocking wait of the spin loop, s (how quickly a signal is noticed).
+SPIN_TIMEOUT_S = 0.05
+
+
+class _StopFlag:
+    """Set by SIGINT/SIGTERM."""
+
+    def __init__(self) -> None:
+        self.signal: int | None = None
+
+    def __call__(self, signum: int, _frame: Any) -> None:
+        self.signal = signum
+
+
+def make_executor(context: Any = None) -> Any:
+    """The executor the nodes use: rclpy's C++ events executor when present (lower overhead per
+    callback, which bounds the lockstep rate), else the single-threaded executor."""
+    try:
+        from rclpy.experimental import EventsExecutor
+        return EventsExecutor(context=context)
+    except ImportError:
+        from rclpy.executors import SingleThreadedExecutor
+        return SingleThreadedExecutor(context=context)
+
+
+def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
+             name: str = "fourws node") -> int:
+    """Create the node with ``factory`` and spin it until a signal or until it finishes.
+
+    The node may define ``finished`` (bool attribute: stop spinning), ``stop_reason`` (str:
+    non-empty means the run was stopped, exit code :data:`EXIT_RUN_STOPPED`) and
+    ``on_shutdown(executor)`` (called after the spin loop, before the context shuts down).
+
+    Parameters
+    ----------
+    factory : callable
+        Builds the node (after ``rclpy.init``).
+    args : sequence of str, optional
+        Command-line arguments (``--ros-args ...``), default ``sys.argv``.
+    name : str
+        Used in messages before the node exists.
+
+    Returns
+    -------
+    int
+        Exit code (see module docstring).
+    """
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+
+    from fourws_sim.errors import FourwsError
+
+    flag = _StopFlag()
+    signal.signal(signal.SIGINT, flag)
+    signal.signal(signal.SIGTERM, flag)
+    rclpy.init(args=list(args) if args is not None else sys.argv,
+               signal_handler_options=SignalHandlerOptions.NO)
+    node = None
+    code = EXIT_OK
+    try:
+        try:
+            node = factory()
+        except FourwsError as exc:
+            print(f"[{name}] error: {exc}", file=sys.stderr, flush=True)
+            return EXIT_USER_ERROR
+        executor = make_executor()
+        executor.add_node(node)
+        while flag.signal is None and not getattr(node, "finished", False) and rclpy.ok():
+            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+        hook = getattr(node, "on_shutdown", None)
+        if hook is not None:
+            hook(executor)
+        reason = getattr(node, "stop_reason", "")
+        if reason:
+            print(f"[{node.get_name()}] run stopped: {reason}", file=sys.stderr, flush=True)
+            code = EXIT_RUN_STOPPED
+        executor.remove_node(node)
+        executor.shutdown(timeout_sec=1.0)
+    finally:
+        if node is not None:
+            node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return code
