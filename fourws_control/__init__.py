@@ -1,1 +1,12 @@
-"""fourws rear-wheel steering control laws (no rclpy)."""
+"""fourws rear-wheel steering control laws (no rclpy).
+
+``make_law(name, belief_vehicle, **options)`` builds a law; ``RearSteerActuator`` applies the
+rear angle and rate limits. See :mod:`fourws_control.base` for the interface.
+"""
+
+from fourws_control.base import (GAIN_UNITS, LawInput, Law, LinearGains, RearSteerActuator,
+                                 Signal)
+from fourws_control.registry import LAWS, available_laws, make_law
+
+__all__ = ["GAIN_UNITS", "LAWS", "Law", "LawInput", "LinearGains", "RearSteerActuator",
+           "Signal", "available_laws", "make_law"]

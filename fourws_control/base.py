@@ -1,0 +1,313 @@
+"""Common interface of the rear-wheel steering laws, and the rear-steer actuator.
+
+Every law in fourws is linear in the measured signals with gains scheduled on the forward
+speed ``U`` (chapter 4 shows that constant gains can destabilize the vehicle):
+
+.. math::
+
+    \\delta_r = k_{\\delta}(U)\\,\\delta_f + k_r(U)\\,r + k_\\phi(U)\\,\\phi
+               + k_{\\dot\\phi}(U)\\,\\dot\\phi + k_V(U)\\,V
+
+A law computes the gain vector :meth:`Law.gains` from its *belief* vehicle (which may differ
+from the simulated one, e.g. ``vehicle.with_axle_tires(0.6)``) and applies it to a
+:class:`LawInput`. Because every law has this form, :meth:`Law.linear_gains` can express it
+in the state/input order of any linear model, which lets the analysis close the loop exactly.
+
+Signs follow ``docs/architecture.md``: positive steer angles turn left, ``r`` positive to the
+left, ``V`` positive to the left, roll positive right side down (the roll gains are expressed
+in that convention whatever the model's internal convention is).
+
+Low speed
+---------
+Closed-form gains contain ``1/U`` terms (e.g. ``Kr U`` of Solution 1 grows like ``1/U``) and
+the LQR design becomes ill-conditioned near standstill. Below ``min_speed_mps`` (default
+:data:`DEFAULT_MIN_SPEED_MPS`) every law therefore uses the gains of ``min_speed_mps`` scaled
+by ``U / min_speed_mps``: the rear steer fades linearly to zero at standstill (and stays zero
+when reversing), continuous in ``U`` and never NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Any, ClassVar, Mapping
+
+import numpy as np
+
+from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
+from fourws_sim.params import Vehicle
+
+#: Speed below which the gains fade linearly to zero at standstill, m/s. Parking-lot speeds
+#: (~7 km/h) keep full gains; walking pace and below fades out.
+DEFAULT_MIN_SPEED_MPS = 2.0
+
+
+class Signal(IntEnum):
+    """Signals a law may use; the order of :meth:`Law.gains`."""
+
+    DELTA_F = 0  #: front road-wheel angle delta_f, rad
+    YAW_RATE = 1  #: yaw rate r, rad/s
+    ROLL = 2  #: roll angle phi (right side down positive), rad
+    ROLL_RATE = 3  #: roll rate, rad/s
+    LATERAL_VELOCITY = 4  #: lateral velocity V of the CG in the body frame, m/s
+
+
+#: Unit of the gain on each signal (rear angle in rad per unit of the signal).
+GAIN_UNITS = {
+    Signal.DELTA_F: "rad/rad",
+    Signal.YAW_RATE: "rad/(rad/s)",
+    Signal.ROLL: "rad/rad",
+    Signal.ROLL_RATE: "rad/(rad/s)",
+    Signal.LATERAL_VELOCITY: "rad/(m/s)",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class LawInput:
+    """What a law may measure at one instant (SI, ``docs/architecture.md`` signs)."""
+
+    delta_f_rad: float
+    speed_mps: float
+    yaw_rate_radps: float = 0.0
+    roll_rad: float = 0.0
+    roll_rate_radps: float = 0.0
+    lateral_velocity_mps: float = 0.0
+    time_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class LinearGains:
+    """A law written for a linear model: ``delta_r = K_x @ x + K_u @ u``.
+
+    Attributes
+    ----------
+    model : str
+        Linear model name (``2dof``, ``2dof-free``, ``2dof-lagged``, ``3dof``).
+    speed_mps : float
+        Forward speed the gains belong to, m/s.
+    K_x : numpy.ndarray
+        Gains on the model states, shape ``(n_states,)``, in the model's ``STATE`` order.
+    K_u : numpy.ndarray
+        Gains on the model inputs, shape ``(n_inputs,)``, in the model's ``INPUT`` order; the
+        entry of the rear-steer input itself is zero.
+    state_names, input_names : tuple of str
+        Names of the model's ``STATE`` and ``INPUT`` members.
+    """
+
+    model: str
+    speed_mps: float
+    K_x: np.ndarray
+    K_u: np.ndarray
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"model": self.model, "speed_mps": self.speed_mps,
+                "K_x": dict(zip(self.state_names, map(float, self.K_x))),
+                "K_u": dict(zip(self.input_names, map(float, self.K_u)))}
+
+
+def check_speed(speed_mps: float, field: str = "speed_mps") -> float:
+    """Return ``speed_mps`` as float; raise :class:`ParameterError` unless finite and > 0."""
+    try:
+        value = float(speed_mps)
+    except (TypeError, ValueError):
+        raise ParameterError(field, f"must be a number, got {speed_mps!r}") from None
+    if not math.isfinite(value) or value <= 0.0:
+        raise ParameterError(field, f"must be finite and > 0 m/s, got {speed_mps!r}")
+    return value
+
+
+def check_option(name: str, value: Any, check: str = "positive") -> float:
+    """Validate one numeric law option ("positive" or "nonnegative"); return it as float."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ParameterError(name, f"must be a number, got {value!r}")
+    v = float(value)
+    ok = v > 0.0 if check == "positive" else v >= 0.0
+    if not math.isfinite(v) or not ok:
+        rel = "> 0" if check == "positive" else ">= 0"
+        raise ParameterError(name, f"must be finite and {rel}, got {value!r}")
+    return v
+
+
+class Law(ABC):
+    """A speed-scheduled linear rear-steer law.
+
+    Parameters
+    ----------
+    belief_vehicle : Vehicle
+        The vehicle the controller believes it drives; gains are computed from it.
+    min_speed_mps : float, optional
+        Below this speed the gains fade linearly to zero at standstill (see module docstring).
+
+    Subclasses set :attr:`name`, :attr:`signals` (the signals with possibly non-zero gain)
+    and implement :meth:`_design_gains` for ``U >= min_speed_mps``.
+    """
+
+    #: Registry name of the law.
+    name: ClassVar[str] = ""
+    #: One-line description with the paper reference.
+    summary: ClassVar[str] = ""
+    #: Signals the law uses; a linear model lacking one of them cannot be closed with it.
+    signals: ClassVar[tuple[Signal, ...]] = ()
+
+    def __init__(self, belief_vehicle: Vehicle, *,
+                 min_speed_mps: float = DEFAULT_MIN_SPEED_MPS) -> None:
+        if not isinstance(belief_vehicle, Vehicle):
+            raise ParameterError("belief_vehicle",
+                                 f"must be a fourws Vehicle, got {type(belief_vehicle).__name__}")
+        self.vehicle = belief_vehicle
+        self.min_speed_mps = check_option("min_speed_mps", min_speed_mps)
+
+    @abstractmethod
+    def _design_gains(self, speed_mps: float) -> np.ndarray:
+        """Gains in :class:`Signal` order at ``speed_mps >= min_speed_mps``."""
+
+    def gains(self, speed_mps: float) -> np.ndarray:
+        """Gain vector in :class:`Signal` order at forward speed ``speed_mps`` (m/s).
+
+        Units per :data:`GAIN_UNITS`. Below ``min_speed_mps`` the gains of ``min_speed_mps``
+        scaled by ``max(U, 0) / min_speed_mps``.
+
+        Raises
+        ------
+        NonFiniteError
+            If the speed is not finite or the gains come out non-finite.
+        """
+        u = float(speed_mps)
+        if not math.isfinite(u):
+            raise NonFiniteError(f"{self.name}: speed_mps must be finite, got {speed_mps!r}")
+        if u >= self.min_speed_mps:
+            k = self._design_gains(u)
+        else:
+            k = self._design_gains(self.min_speed_mps) * (max(u, 0.0) / self.min_speed_mps)
+        if not np.all(np.isfinite(k)):
+            raise NonFiniteError(f"{self.name}: non-finite gains {k} at speed {u} m/s")
+        return k
+
+    def gains_dict(self, speed_mps: float) -> dict[str, float]:
+        """:meth:`gains` as ``{signal name (lower case): gain}`` for reports/JSON."""
+        k = self.gains(speed_mps)
+        return {s.name.lower(): float(k[s]) for s in self.signals}
+
+    def rear_angle(self, inp: LawInput) -> float:
+        """Rear road-wheel angle command in rad (before actuator limits)."""
+        k = self.gains(inp.speed_mps)
+        out = (k[0] * inp.delta_f_rad + k[1] * inp.yaw_rate_radps + k[2] * inp.roll_rad
+               + k[3] * inp.roll_rate_radps + k[4] * inp.lateral_velocity_mps)
+        out = float(out)
+        if not math.isfinite(out):
+            raise NonFiniteError(f"{self.name}: non-finite rear angle for input {inp}")
+        return out
+
+    __call__ = rear_angle
+
+    def linear_gains(self, model_name: str, vehicle: Vehicle | None = None,
+                     speed_mps: float = 0.0) -> LinearGains:
+        """The law in a linear model's state/input order: ``delta_r = K_x x + K_u u``.
+
+        Parameters
+        ----------
+        model_name : str
+            ``2dof``, ``2dof-free``, ``2dof-lagged`` or ``3dof``.
+        vehicle : Vehicle, optional
+            The model's (true) vehicle; only used to check that the model can be built.
+        speed_mps : float
+            Forward speed, m/s (> 0).
+
+        Raises
+        ------
+        ParameterError
+            Speed not > 0.
+        IncompatibleError
+            The law uses a signal the model does not have (e.g. roll feedback on a 2-DOF).
+        """
+        from fourws_control.signals import signal_map  # local: keeps laws free of model imports
+
+        speed = check_speed(speed_mps)
+        smap = signal_map(model_name)
+        missing = [s for s in self.signals if s not in smap.available]
+        if missing:
+            raise IncompatibleError(
+                f"law {self.name!r} needs {', '.join(s.name.lower() for s in missing)}, "
+                f"which model {model_name!r} does not have")
+        k = self.gains(speed)
+        K_x = np.zeros(len(smap.state_names))
+        K_u = np.zeros(len(smap.input_names))
+        for sig, (where, index, scale) in smap.positions.items():
+            if sig not in self.signals:
+                continue
+            if where == "state":
+                K_x[index] += k[sig] * scale
+            else:
+                K_u[index] += k[sig] * scale
+        return LinearGains(model_name, speed, K_x, K_u, smap.state_names, smap.input_names)
+
+    def describe(self) -> Mapping[str, Any]:
+        """Name, summary and belief-vehicle name (for run configurations)."""
+        return {"law": self.name, "summary": self.summary, "belief_vehicle": self.vehicle.name,
+                "min_speed_mps": self.min_speed_mps}
+
+
+class RearSteerActuator:
+    """Rear-steer actuator: angle and rate limits on the commanded rear road-wheel angle.
+
+    Parameters
+    ----------
+    vehicle : Vehicle, optional
+        Source of the default limits (``vehicle.actuators``); the fourws defaults otherwise.
+    angle_limit_rad : float, optional
+        Override of ``|delta_r|`` max, rad (> 0).
+    rate_limit_rad_per_s : float, optional
+        Override of ``|d delta_r / dt|`` max, rad/s (> 0; ``math.inf`` disables it).
+    initial_angle_rad : float
+        Angle at start, rad.
+    """
+
+    def __init__(self, vehicle: Vehicle | None = None, *, angle_limit_rad: float | None = None,
+                 rate_limit_rad_per_s: float | None = None,
+                 initial_angle_rad: float = 0.0) -> None:
+        from fourws_sim.params import Actuators
+
+        act = vehicle.actuators if vehicle is not None else Actuators()
+        self.angle_limit_rad = check_option(
+            "angle_limit_rad",
+            act.rear_angle_limit_rad if angle_limit_rad is None else angle_limit_rad)
+        rate = act.rear_rate_limit_rad_per_s if rate_limit_rad_per_s is None \
+            else rate_limit_rad_per_s
+        if isinstance(rate, (int, float)) and not isinstance(rate, bool) and rate == math.inf:
+            self.rate_limit_rad_per_s = math.inf
+        else:
+            self.rate_limit_rad_per_s = check_option("rate_limit_rad_per_s", rate)
+        self.angle_rad = 0.0
+        self.reset(initial_angle_rad)
+
+    def reset(self, angle_rad: float = 0.0) -> None:
+        """Set the current angle (clipped to the angle limit), rad."""
+        a = float(angle_rad)
+        if not math.isfinite(a):
+            raise NonFiniteError(f"rear actuator: initial angle must be finite, got {angle_rad!r}")
+        self.angle_rad = min(max(a, -self.angle_limit_rad), self.angle_limit_rad)
+
+    def apply(self, command_rad: float, dt_s: float) -> float:
+        """Move toward ``command_rad`` within the limits over ``dt_s`` seconds; return the angle.
+
+        Raises
+        ------
+        NonFiniteError
+            Non-finite command.
+        ParameterError
+            ``dt_s`` not > 0.
+        """
+        cmd = float(command_rad)
+        if not math.isfinite(cmd):
+            raise NonFiniteError(f"rear actuator: command must be finite, got {command_rad!r}")
+        dt = check_option("dt_s", dt_s)
+        target = min(max(cmd, -self.angle_limit_rad), self.angle_limit_rad)
+        max_step = self.rate_limit_rad_per_s * dt
+        step = min(max(target - self.angle_rad, -max_step), max_step)
+        self.angle_rad += step
+        return self.angle_rad

@@ -1,0 +1,188 @@
+r"""Chapter 6 laws designed on the linear 3-DOF roll model (``fourws_sim.models.roll3dof``).
+
+Signs are fourws': roll :math:`\phi` positive right side down (a left turn rolls to positive
+:math:`\phi`), roll steer adds :math:`\varepsilon_i\phi` to road-wheel angle ``i``.
+
+Zero steady-state sideslip (RWC 1, RWC 2)
+-----------------------------------------
+In a steady turn (:math:`\dot V = \dot r = \dot\phi = \ddot\phi = 0`) the roll equation gives
+:math:`\phi = p\,U r` with :math:`p = m_s h/(K_\phi - m_s g h)`, the axle forces are
+:math:`F_{yf} = m U r\,b/L`, :math:`F_{yr} = m U r\,a/L`, and with :math:`V = 0` the axle
+slip equations give
+
+.. math::
+
+    \delta_f = r\left(\frac{a}{U} + \frac{m U b}{L C_f} - \varepsilon_f p U\right),\qquad
+    \delta_r = r\left(-\frac{b}{U} + \frac{m U a}{L C_r} - \varepsilon_r p U\right).
+
+RWC 1 (``rwc1_3dof``, eq. 6.26/6.32) is the feed-forward ratio
+:math:`\delta_r = K_{sf1}\delta_f`,
+
+.. math::
+
+    K_{sf1}(U) = \frac{-b + (m a/(L C_r) - \varepsilon_r p)\,U^2}
+                      {a + (m b/(L C_f) - \varepsilon_f p)\,U^2};
+
+RWC 2 (``rwc2_3dof``, eq. 6.27/6.33) is yaw-rate feedback :math:`\delta_r = K_{r1} U r`,
+
+.. math::
+
+    K_{r1}(U) = \frac{m a}{L C_r} - \varepsilon_r p - \frac{b}{U^2}.
+
+These are the paper's eqs. 6.32/6.33 with its roll-steer sign turned into fourws' (the paper's
+roll angle is positive the other way, so its :math:`+\varepsilon_{rr}` term reads
+:math:`-\varepsilon_r` here). Both gains are negative (counter-steer) at low speed and change
+sign at the same speed :math:`U_0 = \sqrt{b/(m a/(L C_r) - \varepsilon_r p)}` (Figure 6.3).
+Without roll (:math:`m_s h = 0`) RWC 1 is ``ff_zero_sideslip``.
+
+RWC 4 (``rwc4_3dof``, eq. 6.35-6.39)
+------------------------------------
+:math:`\delta_r = K_{sf4}\delta_f + K_{r4} U r + K_\phi\phi + K_{\dot\phi}\dot\phi`, chosen so
+that the lateral-velocity equation of the 3-DOF model keeps only its :math:`V` term
+(:math:`\dot V = A_{VV} V`): with :math:`A_{V\cdot}`, :math:`B_{V\cdot}` the V rows of the
+model's first-order matrices, each gain is :math:`-A_{Vj}/B_{V\delta_r}` (and
+:math:`-B_{V\delta_f}/B_{V\delta_r}` for the feed-forward). The paper prints these as closed
+forms (6.36-6.39, badly damaged in the OCR); fourws takes them from the model matrices of the
+belief vehicle. The V row is exactly :math:`c_0 + c_1/U + c_2 U` per entry (the mass matrix
+does not depend on U), so the law fits it once from three speeds at construction, checks it
+at a fourth, and evaluates the closed form per call (no matrix algebra at 100 Hz).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fourws_control._vehicle import bicycle
+from fourws_control.base import Law, Signal
+from fourws_sim.errors import IncompatibleError
+from fourws_sim.models import roll3dof
+from fourws_sim.params import GRAVITY_MPS2, Vehicle
+
+#: Speeds (m/s) at which RWC 4 samples the model's V row to fit c0 + c1/U + c2 U, and the
+#: speed at which the fit is verified.
+_FIT_SPEEDS_MPS = (5.0, 20.0, 60.0)
+_CHECK_SPEED_MPS = 33.0
+#: Relative tolerance of that verification.
+_FIT_RTOL = 1e-9
+
+
+def roll_compliance(vehicle: Vehicle) -> float:
+    """p = m_s h / (K_phi - m_s g h): steady roll per unit lateral acceleration, rad/(m/s^2).
+
+    Raises
+    ------
+    ParameterError
+        Missing ``roll`` subsystem.
+    IncompatibleError
+        ``K_phi <= m_s g h``: the roll mode is statically unstable (eq. 6.63), no steady turn.
+    """
+    vehicle.require("roll", user="the chapter-6 laws")
+    rl = vehicle.roll
+    msh = rl.sprung_mass_kg * rl.roll_arm_m
+    net = rl.roll_stiffness_nm_per_rad - msh * GRAVITY_MPS2
+    if net <= 0.0:
+        raise IncompatibleError(
+            f"roll.roll_stiffness_*: total roll stiffness {rl.roll_stiffness_nm_per_rad} N m/rad "
+            f"does not exceed m_s g h = {msh * GRAVITY_MPS2:.1f} N m/rad; the roll mode is "
+            f"unstable (eq. 6.63) in {vehicle.source or vehicle.name}")
+    return msh / net
+
+
+def zero_sideslip_gains_3dof(vehicle: Vehicle, speed_mps: float) -> tuple[float, float]:
+    """(Ksf1 in rad/rad, Kr1 in s/m, applied as Kr1 U r) of RWC 1 and RWC 2 at ``speed_mps``."""
+    p = bicycle(vehicle)
+    pr = roll_compliance(vehicle)
+    ef, er = vehicle.roll.roll_steer_front, vehicle.roll.roll_steer_rear
+    u2 = speed_mps * speed_mps
+    rear = p.m * p.a / (p.L * p.cr) - er * pr  # coefficient of U^2 in delta_r / (r/U)
+    front = p.m * p.b / (p.L * p.cf) - ef * pr
+    ksf1 = (-p.b + rear * u2) / (p.a + front * u2)
+    kr1 = rear - p.b / u2
+    return ksf1, kr1
+
+
+def sign_change_speed_mps(vehicle: Vehicle) -> float:
+    """Speed (m/s) where RWC 1 and RWC 2 gains change sign (Figure 6.3); inf if never."""
+    p = bicycle(vehicle)
+    rear = p.m * p.a / (p.L * p.cr) - vehicle.roll.roll_steer_rear * roll_compliance(vehicle)
+    return float(np.sqrt(p.b / rear)) if rear > 0.0 else float("inf")
+
+
+class Rwc1Law(Law):
+    """RWC 1 of chapter 6: feed-forward giving zero steady sideslip on the 3-DOF model."""
+
+    name = "rwc1_3dof"
+    summary = "chapter 6 RWC 1: delta_r = Ksf1(U) delta_f, zero steady sideslip with roll"
+    signals = (Signal.DELTA_F,)
+
+    def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
+        super().__init__(belief_vehicle, **options)
+        roll_compliance(belief_vehicle)  # fail at construction, not at 100 Hz
+
+    def _design_gains(self, speed_mps: float) -> np.ndarray:
+        k = np.zeros(len(Signal))
+        k[Signal.DELTA_F] = zero_sideslip_gains_3dof(self.vehicle, speed_mps)[0]
+        return k
+
+
+class Rwc2Law(Law):
+    """RWC 2 of chapter 6: yaw-rate feedback giving zero steady sideslip on the 3-DOF model."""
+
+    name = "rwc2_3dof"
+    summary = "chapter 6 RWC 2: delta_r = Kr1(U) U r, zero steady sideslip with roll"
+    signals = (Signal.YAW_RATE,)
+
+    def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
+        super().__init__(belief_vehicle, **options)
+        roll_compliance(belief_vehicle)
+
+    def _design_gains(self, speed_mps: float) -> np.ndarray:
+        k = np.zeros(len(Signal))
+        k[Signal.YAW_RATE] = zero_sideslip_gains_3dof(self.vehicle, speed_mps)[1] * speed_mps
+        return k
+
+
+class Rwc4Law(Law):
+    """RWC 4 of chapter 6: decouples the lateral velocity of the 3-DOF model."""
+
+    name = "rwc4_3dof"
+    summary = ("chapter 6 RWC 4: delta_r = Ksf4 delta_f + Kr4 U r + Kphi phi + Kphidot phidot, "
+               "V decoupled")
+    signals = (Signal.DELTA_F, Signal.YAW_RATE, Signal.ROLL, Signal.ROLL_RATE)
+
+    def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
+        super().__init__(belief_vehicle, **options)
+        S, I = roll3dof.STATE, roll3dof.INPUT
+        rows = []
+        b_rows = []
+        for u in _FIT_SPEEDS_MPS:
+            A, B = roll3dof.matrices(belief_vehicle, u)
+            rows.append(A[S.V])
+            b_rows.append(B[S.V])
+        # A_V(U) = c0 + c1/U + c2 U, solved entry-wise from the three samples
+        basis = np.array([[1.0, 1.0 / u, u] for u in _FIT_SPEEDS_MPS])
+        self._coef = np.linalg.solve(basis, np.array(rows))  # (3, n_states)
+        A, B = roll3dof.matrices(belief_vehicle, _CHECK_SPEED_MPS)
+        fit = self._row(_CHECK_SPEED_MPS)
+        if not np.allclose(fit, A[S.V], rtol=_FIT_RTOL, atol=1e-12 * np.abs(A).max()):
+            raise IncompatibleError("rwc4_3dof: the 3dof model's V row is not of the form "
+                                    "c0 + c1/U + c2 U; the law's closed form does not apply")
+        b_v = b_rows[0]
+        if abs(b_v[I.DELTA_R]) == 0.0:
+            raise IncompatibleError("rwc4_3dof: rear steer has no direct effect on dV/dt")
+        self._b_rear = float(b_v[I.DELTA_R])
+        self._ksf = -float(b_v[I.DELTA_F]) / self._b_rear
+
+    def _row(self, speed_mps: float) -> np.ndarray:
+        c = self._coef
+        return c[0] + c[1] / speed_mps + c[2] * speed_mps
+
+    def _design_gains(self, speed_mps: float) -> np.ndarray:
+        S = roll3dof.STATE
+        row = self._row(speed_mps)
+        k = np.zeros(len(Signal))
+        k[Signal.DELTA_F] = self._ksf
+        k[Signal.YAW_RATE] = -row[S.R] / self._b_rear
+        k[Signal.ROLL] = -row[S.PHI] / self._b_rear
+        k[Signal.ROLL_RATE] = -row[S.PHI_DOT] / self._b_rear
+        return k

@@ -1,0 +1,104 @@
+"""Where each law signal sits in a linear model's state/input vectors.
+
+A law is ``delta_r = sum_s k_s * signal_s`` (:class:`fourws_control.base.Signal`). To close a
+linear model analytically the signals are found among the model's ``STATE``/``INPUT`` members
+by name (models name their components, ``docs/architecture.md``). A model whose roll angle is
+defined opposite to fourws' right-side-down convention declares ``ROLL_SIGN = -1``; the map
+then flips the roll gains.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import ModuleType
+
+from fourws_control.base import Signal
+from fourws_sim.errors import IncompatibleError
+from fourws_sim.models import get_model
+
+#: Member names a model may use for each signal (first match wins).
+_NAMES: dict[Signal, tuple[str, ...]] = {
+    Signal.DELTA_F: ("DELTA_F",),
+    Signal.YAW_RATE: ("R", "YAW_RATE"),
+    Signal.ROLL: ("PHI", "ROLL"),
+    Signal.ROLL_RATE: ("PHI_DOT", "P", "ROLL_RATE", "PHIDOT"),
+    Signal.LATERAL_VELOCITY: ("V", "LATERAL_VELOCITY"),
+}
+#: Name of the rear-steer input of every linear model.
+REAR_INPUT = "DELTA_R"
+#: Linear models a law can be written for.
+LINEAR_MODELS = ("2dof", "2dof-free", "2dof-lagged", "3dof")
+
+
+@dataclass(frozen=True)
+class SignalMap:
+    """Positions of the law signals in one linear model.
+
+    Attributes
+    ----------
+    model : str
+        Model name.
+    state_names, input_names : tuple of str
+        ``STATE`` / ``INPUT`` member names in order.
+    positions : dict
+        ``Signal -> (where, index, sign)``; ``where`` is ``"state"`` or ``"input"``.
+    rear_input : int
+        Index of the rear-steer input in ``INPUT``.
+    """
+
+    model: str
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    positions: dict[Signal, tuple[str, int, float]]
+    rear_input: int
+
+    @property
+    def available(self) -> frozenset[Signal]:
+        """Signals the model has."""
+        return frozenset(self.positions)
+
+    @property
+    def driver_inputs(self) -> tuple[int, ...]:
+        """Indices of the inputs other than the rear steer (the driver's)."""
+        return tuple(i for i in range(len(self.input_names)) if i != self.rear_input)
+
+
+def _find(enum: type, names: tuple[str, ...]) -> int | None:
+    members = enum.__members__
+    for n in names:
+        if n in members:
+            return int(members[n])
+    return None
+
+
+def signal_map(model_name: str, module: ModuleType | None = None) -> SignalMap:
+    """Build the :class:`SignalMap` of linear model ``model_name``.
+
+    Raises
+    ------
+    UnknownNameError
+        Unknown model name.
+    IncompatibleError
+        The model is not a linear model with a rear-steer input.
+    """
+    mod = module if module is not None else get_model(model_name)
+    if not hasattr(mod, "matrices"):
+        raise IncompatibleError(f"model {model_name!r} is not linear; linear models: "
+                                f"{', '.join(LINEAR_MODELS)}")
+    state, inp = mod.STATE, mod.INPUT
+    rear = _find(inp, (REAR_INPUT,))
+    if rear is None:
+        raise IncompatibleError(f"model {model_name!r} has no rear-steer input {REAR_INPUT}")
+    roll_sign = float(getattr(mod, "ROLL_SIGN", 1.0))
+    positions: dict[Signal, tuple[str, int, float]] = {}
+    for sig, names in _NAMES.items():
+        sign = roll_sign if sig in (Signal.ROLL, Signal.ROLL_RATE) else 1.0
+        idx = _find(state, names)
+        if idx is not None:
+            positions[sig] = ("state", idx, sign)
+            continue
+        idx = _find(inp, names)
+        if idx is not None:
+            positions[sig] = ("input", idx, sign)
+    return SignalMap(model_name, tuple(state.__members__), tuple(inp.__members__), positions,
+                     rear)
