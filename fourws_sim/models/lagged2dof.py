@@ -1,0 +1,131 @@
+r"""Linear 2-DOF bicycle model with time-lagged tire side force (Samsundar 1996, ch. 5).
+
+Stretched-string tire (von Schlippe): the axle side force builds up over the relaxation
+length :math:`\sigma` of rolled distance, i.e. a first-order lag of time constant
+:math:`\sigma/U` behind the quasi-static force of the kinematic slip angle (eqs. 5.8-5.19):
+
+.. math::
+
+    \frac{\sigma}{U}\dot F_{yi} + F_{yi} = -C_i \alpha_{0i}, \qquad
+    \alpha_{0f} = \frac{V + a r}{U} - \delta_f, \quad
+    \alpha_{0r} = \frac{V - b r}{U} - \delta_r,
+
+    m(\dot V + U r) = F_{yf} + F_{yr}, \qquad I_z \dot r = a F_{yf} - b F_{yr}.
+
+The paper carries the compliant slip angles :math:`\alpha_c = -F/C` as states; fourws carries
+the forces themselves (same dynamics, states in N). States ``[V, r, Fyf, Fyr]``, inputs
+``[delta_f, delta_r]``. As :math:`\sigma \to 0` the force states become infinitely fast and
+the slow eigenvalues tend to those of :mod:`fourws_sim.models.linear2dof`; the steady state
+does not depend on :math:`\sigma` (section 5.7).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+
+from fourws_sim.errors import ParameterError
+from fourws_sim.models import check_speed
+from fourws_sim.models import linear2dof
+from fourws_sim.params import Vehicle
+
+
+class STATE(IntEnum):
+    """State components."""
+
+    V = 0  #: lateral velocity, m/s
+    R = 1  #: yaw rate, rad/s
+    FY_F = 2  #: front axle lateral force, N (positive left)
+    FY_R = 3  #: rear axle lateral force, N (positive left)
+
+
+class INPUT(IntEnum):
+    """Input components."""
+
+    DELTA_F = 0  #: front road-wheel angle, rad
+    DELTA_R = 1  #: rear road-wheel angle, rad
+
+
+@dataclass(frozen=True)
+class Params:
+    """Parameters of the lagged-force model at one speed.
+
+    Attributes
+    ----------
+    fixed : linear2dof.Params
+        The 2-DOF parameters at the same speed.
+    relaxation_length_m : float
+        sigma in m (> 0).
+    A, B : numpy.ndarray
+        4x4 state and 4x2 input matrices.
+    """
+
+    fixed: linear2dof.Params
+    relaxation_length_m: float
+    A: np.ndarray
+    B: np.ndarray
+
+
+def params_for(vehicle: Vehicle, speed_mps: float, *,
+               relaxation_length_m: float | None = None) -> Params:
+    """Build the model parameters of ``vehicle`` at ``speed_mps`` (m/s).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Needs the ``tire`` subsystem (its ``relaxation_length_m``) unless
+        ``relaxation_length_m`` is given.
+    speed_mps : float
+        Forward speed U in m/s.
+    relaxation_length_m : float, optional
+        Override of sigma in m (e.g. to sweep it).
+
+    Raises
+    ------
+    ParameterError
+        If the speed is not finite and > 0, or sigma is missing or not > 0 (sigma = 0 is the
+        plain ``2dof`` model).
+    """
+    source = vehicle.source or vehicle.name
+    u = check_speed(speed_mps, source)
+    if relaxation_length_m is None:
+        vehicle.require("tire", user="2dof-lagged model")
+        sigma = vehicle.tire.relaxation_length_m
+        field = "tire.relaxation_length_m"
+    else:
+        sigma = float(relaxation_length_m)
+        field = "relaxation_length_m"
+    if not np.isfinite(sigma) or sigma <= 0.0:
+        raise ParameterError(field, f"must be > 0 for the 2dof-lagged model (0 is the 2dof "
+                             f"model), got {sigma!r}", source)
+    fixed = linear2dof.params_for(vehicle, u)
+    m, iz, a, b = fixed.mass_kg, fixed.yaw_inertia_kgm2, fixed.a_m, fixed.b_m
+    cf, cr = fixed.cf_n_per_rad, fixed.cr_n_per_rad
+    lag = u / sigma  # 1/s, inverse time constant of the force build-up
+    S, I = STATE, INPUT
+    A = np.zeros((4, 4))
+    A[S.V, S.R] = -u
+    A[S.V, S.FY_F] = A[S.V, S.FY_R] = 1.0 / m
+    A[S.R, S.FY_F] = a / iz
+    A[S.R, S.FY_R] = -b / iz
+    A[S.FY_F] = [-lag * cf / u, -lag * cf * a / u, -lag, 0.0]
+    A[S.FY_R] = [-lag * cr / u, lag * cr * b / u, 0.0, -lag]
+    B = np.zeros((4, 2))
+    B[S.FY_F, I.DELTA_F] = lag * cf
+    B[S.FY_R, I.DELTA_R] = lag * cr
+    return Params(fixed, sigma, A, B)
+
+
+def matrices(vehicle: Vehicle, speed_mps: float, *,
+             relaxation_length_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """State matrix A (4x4) and input matrix B (4x2) at ``speed_mps`` (m/s)."""
+    p = params_for(vehicle, speed_mps, relaxation_length_m=relaxation_length_m)
+    return p.A.copy(), p.B.copy()
+
+
+def derivatives(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
+    """State derivative ``[dV/dt, dr/dt, dFyf/dt, dFyr/dt] = A x + B u`` (SI)."""
+    return p.A @ np.asarray(x, dtype=float) + p.B @ np.asarray(u, dtype=float)
+
