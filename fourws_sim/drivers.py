@@ -1,0 +1,343 @@
+"""Driver models: the speed-hold driver and a single-point preview path follower.
+
+A maneuver (:mod:`fourws_sim.maneuvers`) combines an open-loop steering waveform or a path
+follower with the speed-hold driver into one :class:`DriverCommand` per control tick.
+
+Call sequence and determinism
+-----------------------------
+Drivers with internal state (the PI integrator of :class:`SpeedHoldDriver`, the lateral-error
+integrator of :class:`PreviewPathDriver`) advance *only* inside their ``command``/``steer``
+calls, by ``dt = t - t_previous`` of the times they are given (0 on the first call). Online
+(the maneuver node, called once per received state at the control rate) and offline
+(:func:`fourws_sim.closed_loop.run_closed_loop`) they are called with the same sequence of
+``(t_k, outputs_k)``, so they produce the same commands bit for bit.
+
+Speed-hold driver
+-----------------
+A PI controller from the speed error ``e = U_target - U`` (m/s) to a longitudinal acceleration
+request ``a = kp e + ki \\int e dt`` (m/s^2), turned into a total wheel torque
+``T = m R (a + f_r g)`` (N m; ``m`` vehicle mass, ``R`` wheel radius, ``f_r`` rolling-resistance
+coefficient of the tire data). ``T > 0`` is shared equally by the driven wheels; ``T < 0`` is
+applied as brake torque split front/rear by ``brake_front_fraction`` (each axle's share equally
+on its two wheels). The integrator stops while the torque saturates (anti-windup by
+conditional integration). Vehicles with no ``body`` data (single-track models, which hold speed
+by construction) get zero torques.
+
+Preview path follower
+---------------------
+A single-point preview ("pure pursuit") driver: the driver looks at the point of the reference
+path a preview distance ``L_p = max(L_min, U T_p)`` ahead of the vehicle and steers the
+curvature of the circular arc through that point tangent to the current heading,
+``kappa = 2 y_p / L_p^2`` (``y_p`` the lateral offset of the preview point in the vehicle
+frame; Coulter 1992, "Implementation of the pure pursuit path tracking algorithm",
+CMU-RI-TR-92-01). The preview-time concept and the 0.5–1.5 s range of human preview times
+follow MacAdam (1981), "Application of an optimal preview control for simulation of closed-loop
+automobile driving", IEEE Trans. SMC 11(6). The curvature is turned into a front road-wheel
+angle with the driver's internal model of the car, the steady-state inverse of the linear
+bicycle model, ``delta_f = (L + K_us U^2) kappa`` (``K_us`` the understeer gradient of the
+vehicle's axle cornering stiffnesses), plus a slow integral of the lateral path error — the
+trim a human driver applies in steady cornering — which removes the remaining offset that tire
+nonlinearity and a rear-steer law (which changes the car's steady-state gain) leave.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping, Protocol
+
+import numpy as np
+
+from fourws_sim.errors import ParameterError
+from fourws_sim.params import GRAVITY_MPS2, Vehicle, _from_mapping, _spec
+
+#: Number of wheels; order FL, FR, RL, RR everywhere.
+N_WHEELS = 4
+_FRONT_WHEELS = (0, 1)
+_REAR_WHEELS = (2, 3)
+_DRIVEN = {"front": _FRONT_WHEELS, "rear": _REAR_WHEELS, "all": (0, 1, 2, 3)}
+
+
+@dataclass(frozen=True)
+class DriverCommand:
+    """One driver input (the fields of ``DriverInput.msg``).
+
+    Attributes
+    ----------
+    steering_wheel_angle_rad : float
+        Hand-wheel angle in rad (= ``front_wheel_angle_rad * steering ratio``).
+    front_wheel_angle_rad : float
+        Front road-wheel angle in rad, positive turns left.
+    steering_torque_nm : float
+        Driver torque on the steering wheel in N m (free-control model only; 0 here).
+    drive_torque_nm : tuple of 4 float
+        Drive torque per wheel (FL, FR, RL, RR) in N m, positive drives forward.
+    brake_torque_nm : tuple of 4 float
+        Brake torque per wheel in N m, >= 0, always opposes wheel spin.
+    """
+
+    steering_wheel_angle_rad: float
+    front_wheel_angle_rad: float
+    steering_torque_nm: float = 0.0
+    drive_torque_nm: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    brake_torque_nm: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain mapping with the field names of ``DriverInput.msg``."""
+        return {
+            "steering_wheel_angle_rad": self.steering_wheel_angle_rad,
+            "front_wheel_angle_rad": self.front_wheel_angle_rad,
+            "steering_torque_nm": self.steering_torque_nm,
+            "drive_torque_nm": list(self.drive_torque_nm),
+            "brake_torque_nm": list(self.brake_torque_nm),
+        }
+
+
+@dataclass(frozen=True)
+class SpeedHoldSpec:
+    """Gains and torque routing of the speed-hold driver (YAML key ``speed_hold``).
+
+    Defaults: ``kp = 2 /s`` gives a 0.5 s time constant of the speed loop, fast against the
+    seconds-long maneuvers yet slow against the tire/wheel-spin dynamics; ``ki = 1 /s^2`` puts
+    the PI zero at 0.5 rad/s so the integral removes the cornering drag within a few seconds.
+    ``driven_axle = rear`` keeps the steered front tires free of drive force, closest to the
+    paper's constant-speed simulations (ch. 8 holds U constant). ``brake_front_fraction`` 0.65
+    is a typical passenger-car brake balance.
+    """
+
+    enabled: bool = True
+    kp_per_s: float = _spec("nonnegative", default=2.0, doc="accel per speed error, 1/s")
+    ki_per_s2: float = _spec("nonnegative", default=1.0, doc="accel per integrated error, 1/s^2")
+    driven_axle: str = "rear"
+    brake_front_fraction: float = _spec("fraction", default=0.65, doc="front share of braking")
+    max_accel_mps2: float = _spec(default=3.0, doc="drive request limit, m/s^2")
+    max_decel_mps2: float = _spec(default=8.0, doc="brake request limit, m/s^2")
+
+    def _check(self, source: str | None, prefix: str) -> None:
+        if not isinstance(self.enabled, bool):
+            raise ParameterError(f"{prefix}enabled", "must be true or false", source)
+        if self.driven_axle not in _DRIVEN:
+            raise ParameterError(f"{prefix}driven_axle",
+                                 f"must be one of {', '.join(_DRIVEN)}, got {self.driven_axle!r}",
+                                 source)
+
+
+def split_brake_torque(total_nm: float, front_fraction: float
+                       ) -> tuple[float, float, float, float]:
+    """Split a total brake torque (N m, >= 0) over FL, FR, RL, RR by the front fraction."""
+    front = 0.5 * total_nm * front_fraction
+    rear = 0.5 * total_nm * (1.0 - front_fraction)
+    return (front, front, rear, rear)
+
+
+class SpeedHoldDriver:
+    """PI speed-hold driver acting through wheel drive and brake torques (see module doc).
+
+    Parameters
+    ----------
+    spec : SpeedHoldSpec
+        Gains and routing.
+    vehicle : Vehicle
+        Mass (kg), wheel radius (m, ``body``) and rolling resistance (``tire``) are used.
+    """
+
+    def __init__(self, spec: SpeedHoldSpec, vehicle: Vehicle) -> None:
+        self.spec = spec
+        self._mass_kg = vehicle.chassis.mass_kg
+        self._radius_m = vehicle.body.wheel_radius_m if vehicle.body is not None else 0.0
+        self._rolling = vehicle.tire.rolling_resistance if vehicle.tire is not None else 0.0
+        self._integral_m = 0.0
+        self._t_prev: float | None = None
+
+    def reset(self) -> None:
+        """Clear the integrator (a new run)."""
+        self._integral_m = 0.0
+        self._t_prev = None
+
+    def command(self, t_s: float, speed_mps: float, target_mps: float
+                ) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """Drive and brake torques (N m, FL FR RL RR) holding ``target_mps``.
+
+        Advances the integrator by ``t_s - t_previous``.
+        """
+        dt = 0.0 if self._t_prev is None else max(t_s - self._t_prev, 0.0)
+        self._t_prev = t_s
+        zeros = (0.0, 0.0, 0.0, 0.0)
+        if not self.spec.enabled or self._radius_m <= 0.0:
+            return zeros, zeros
+        error = target_mps - speed_mps
+        request = self.spec.kp_per_s * error + self.spec.ki_per_s2 * self._integral_m
+        saturated = request > self.spec.max_accel_mps2 or request < -self.spec.max_decel_mps2
+        if not saturated:
+            self._integral_m += error * dt
+        request = min(max(request, -self.spec.max_decel_mps2), self.spec.max_accel_mps2)
+        total_nm = self._mass_kg * self._radius_m * (request + self._rolling * GRAVITY_MPS2)
+        if total_nm >= 0.0:
+            wheels = _DRIVEN[self.spec.driven_axle]
+            share = total_nm / len(wheels)
+            drive = tuple(share if i in wheels else 0.0 for i in range(N_WHEELS))
+            return drive, zeros
+        return zeros, split_brake_torque(-total_nm, self.spec.brake_front_fraction)
+
+
+# ---------------------------------------------------------------------------- paths
+
+class Path(Protocol):
+    """A reference path in the earth frame (``odom``: x, y in m)."""
+
+    def preview_point(self, x_m: float, y_m: float, heading_rad: float,
+                      distance_m: float) -> tuple[float, float]:
+        """Earth-frame point of the path about ``distance_m`` ahead of the vehicle."""
+
+    def lateral_error(self, x_m: float, y_m: float) -> float:
+        """Signed distance of (x, y) from the path in m, positive to the left of it."""
+
+
+@dataclass(frozen=True)
+class CirclePath:
+    """A circle of radius ``radius_m`` driven counter-clockwise (left, ``direction=+1``) or
+    clockwise (right, ``-1``), tangent to the x axis at the origin (the start pose)."""
+
+    radius_m: float
+    direction: int = 1
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        """Centre (x, y) in m."""
+        return (0.0, self.direction * self.radius_m)
+
+    def _angle(self, x_m: float, y_m: float) -> float:
+        cx, cy = self.centre
+        return math.atan2(y_m - cy, x_m - cx)
+
+    def preview_point(self, x_m: float, y_m: float, heading_rad: float,
+                      distance_m: float) -> tuple[float, float]:
+        """Point on the circle at chord distance ``distance_m`` ahead of the projection."""
+        cx, cy = self.centre
+        r = self.radius_m
+        half = min(distance_m / (2.0 * r), 1.0)
+        ang = self._angle(x_m, y_m) + self.direction * 2.0 * math.asin(half)
+        return (cx + r * math.cos(ang), cy + r * math.sin(ang))
+
+    def lateral_error(self, x_m: float, y_m: float) -> float:
+        """Positive when the vehicle is left of the path (inside a left circle)."""
+        cx, cy = self.centre
+        dist = math.hypot(x_m - cx, y_m - cy)
+        return self.direction * (self.radius_m - dist)
+
+
+@dataclass(frozen=True)
+class LanePath:
+    """A path ``y = y_ref(x)`` for straight-ahead courses (lane changes), x increasing.
+
+    Knots are joined by raised-cosine (C1) blends so the reference has no heading jumps.
+    """
+
+    x_knots_m: tuple[float, ...]
+    y_knots_m: tuple[float, ...]
+
+    def y_ref(self, x_m: float) -> float:
+        """Reference lateral position (m) at longitudinal position ``x_m``."""
+        xs, ys = self.x_knots_m, self.y_knots_m
+        if x_m <= xs[0]:
+            return ys[0]
+        if x_m >= xs[-1]:
+            return ys[-1]
+        i = int(np.searchsorted(xs, x_m, side="right")) - 1
+        s = (x_m - xs[i]) / (xs[i + 1] - xs[i])
+        return ys[i] + (ys[i + 1] - ys[i]) * 0.5 * (1.0 - math.cos(math.pi * s))
+
+    def preview_point(self, x_m: float, y_m: float, heading_rad: float,
+                      distance_m: float) -> tuple[float, float]:
+        """Path point ``distance_m`` ahead along x."""
+        xp = x_m + distance_m * math.cos(heading_rad)
+        return (xp, self.y_ref(xp))
+
+    def lateral_error(self, x_m: float, y_m: float) -> float:
+        """``y - y_ref(x)`` in m."""
+        return y_m - self.y_ref(x_m)
+
+
+@dataclass(frozen=True)
+class PathDriverSpec:
+    """Parameters of the preview path follower (YAML key ``path_driver``).
+
+    Defaults: preview time 0.8 s (within MacAdam's 0.5–1.5 s of human drivers; shorter makes
+    the closed loop with the car's own yaw lag oscillatory, longer cuts the lane-change gates),
+    minimum preview 5 m for low speed, integral gain 0.02 rad of road-wheel angle per (m s) of
+    lateral error — a trim that acts over ~10 s, well below the path loop's bandwidth — and a
+    road-wheel angle limit of 0.6 rad (a passenger car's lock).
+    """
+
+    preview_time_s: float = _spec(default=0.8, doc="T_p, preview time")
+    min_preview_m: float = _spec(default=5.0, doc="L_min, minimum preview distance")
+    integral_gain_rad_per_ms: float = _spec("nonnegative", default=0.02,
+                                            doc="k_i, road-wheel rad per (m s) of path error")
+    steer_limit_rad: float = _spec(default=0.6, doc="|delta_f| limit")
+
+
+class PreviewPathDriver:
+    """Single-point preview (pure pursuit) steering driver on a :class:`Path` (module doc).
+
+    Parameters
+    ----------
+    spec : PathDriverSpec
+        Preview and trim parameters.
+    vehicle : Vehicle
+        Wheelbase L (m) and understeer gradient K_us (rad s^2/m) of the driver's car model.
+    path : Path
+        Reference path in the earth frame.
+    """
+
+    def __init__(self, spec: PathDriverSpec, vehicle: Vehicle, path: Path) -> None:
+        self.spec = spec
+        self.path = path
+        self._wheelbase_m = vehicle.chassis.wheelbase_m
+        self._k_us = vehicle.understeer_gradient_rad_per_mps2
+        self._integral_ms = 0.0
+        self._t_prev: float | None = None
+
+    def reset(self) -> None:
+        """Clear the integrator (a new run)."""
+        self._integral_ms = 0.0
+        self._t_prev = None
+
+    def steer(self, t_s: float, outputs: Mapping[str, Any]) -> float:
+        """Front road-wheel angle (rad) from the vehicle pose and speed in ``outputs``."""
+        dt = 0.0 if self._t_prev is None else max(t_s - self._t_prev, 0.0)
+        self._t_prev = t_s
+        x = float(outputs["x_m"])
+        y = float(outputs["y_m"])
+        psi = float(outputs["heading_rad"])
+        speed = float(outputs["speed_mps"])
+        preview = max(self.spec.min_preview_m, abs(speed) * self.spec.preview_time_s)
+        px, py = self.path.preview_point(x, y, psi, preview)
+        dx, dy = px - x, py - y
+        lateral = -math.sin(psi) * dx + math.cos(psi) * dy
+        dist2 = dx * dx + dy * dy
+        curvature = 2.0 * lateral / dist2 if dist2 > 0.0 else 0.0
+        error = self.path.lateral_error(x, y)
+        self._integral_ms += error * dt
+        delta = ((self._wheelbase_m + self._k_us * speed * speed) * curvature
+                 - self.spec.integral_gain_rad_per_ms * self._integral_ms)
+        limit = self.spec.steer_limit_rad
+        return min(max(delta, -limit), limit)
+
+
+def speed_hold_spec_from(data: Any, source: str | None, prefix: str = "speed_hold."
+                         ) -> SpeedHoldSpec:
+    """Validate a ``speed_hold`` mapping (``None`` gives the defaults)."""
+    return _from_mapping(SpeedHoldSpec, {} if data is None else data, source, prefix)
+
+
+def path_driver_spec_from(data: Any, source: str | None, prefix: str = "path_driver."
+                          ) -> PathDriverSpec:
+    """Validate a ``path_driver`` mapping (``None`` gives the defaults)."""
+    return _from_mapping(PathDriverSpec, {} if data is None else data, source, prefix)
+
+
+__all__ = [
+    "CirclePath", "DriverCommand", "LanePath", "N_WHEELS", "Path", "PathDriverSpec",
+    "PreviewPathDriver", "SpeedHoldDriver", "SpeedHoldSpec", "path_driver_spec_from",
+    "speed_hold_spec_from", "split_brake_torque",
+]

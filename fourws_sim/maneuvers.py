@@ -1,0 +1,708 @@
+"""Maneuvers: steering inputs, closed-loop driving tasks and the speed-hold driver, from YAML.
+
+A maneuver file (``config/maneuvers/<name>.yaml``) is a mapping::
+
+    name: step_steer_85kmh          # optional, defaults to the file stem
+    type: step_steer                # one of MANEUVER_TYPES
+    description: ...
+    initial_speed_mps: 23.611       # speed the simulator is reset to
+    duration_s: 5.0
+    steer_input: road_wheel         # amplitudes are road-wheel (front) angles ...
+                                    # ... or "steering_wheel" (hand-wheel angles, divided by
+                                    # the vehicle's steering.ratio)
+    speed_hold: {kp_per_s: 2.0}     # optional, see fourws_sim.drivers.SpeedHoldSpec
+    path_driver: {...}              # optional, path-following types only (PathDriverSpec)
+    <type fields>                   # e.g. amplitude_rad, start_s, ramp_time_s
+
+All angles are in rad, times in s, speeds in m/s, accelerations in m/s^2. Every type holds the
+initial speed with the speed-hold driver (so "constant speed" really is constant on the 8-DOF
+model), except while ``brake_in_turn`` brakes.
+
+Runtime interface (the maneuver node and the offline runner use only this)::
+
+    m = make_maneuver(load_maneuver_spec("step_steer_85kmh"), vehicle)
+    m.initial_speed_mps, m.duration_s
+    m.command(t, outputs) -> DriverCommand     # outputs: dict of Simulator.outputs()
+    m.phase(t) -> str;  m.progress(t) -> float in [0, 1];  m.done(t, outputs) -> bool
+    m.to_dict() -> mapping (the file layout; load_maneuver_spec(m.to_dict()) rebuilds it)
+
+``command`` must be called once per control tick with increasing ``t`` (stateful drivers advance
+only there, see :mod:`fourws_sim.drivers`); ``phase``, ``progress`` and ``done`` have no side
+effects except that ``done`` of ``slow_ramp_steer`` and ``constant_radius`` looks at the
+outputs it is given.
+
+Standards and the source: step steer, sine, random and pulse inputs follow ISO 7401 (lateral
+transient response test methods); slowly increasing steer and constant radius follow ISO 4138
+(steady-state circular driving); the lane change follows the ISO 3888-2 obstacle-avoidance track;
+ramp steer and braking in a turn are the ch. 8 maneuvers of Samsundar (1996).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path as FilePath
+from typing import Any, Mapping
+
+import numpy as np
+import yaml
+
+from fourws_sim.drivers import (
+    CirclePath, DriverCommand, LanePath, PathDriverSpec, PreviewPathDriver, SpeedHoldDriver,
+    SpeedHoldSpec, path_driver_spec_from, speed_hold_spec_from, split_brake_torque,
+)
+from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.params import CONFIG_DIR, GRAVITY_MPS2, Vehicle, _from_mapping, _spec
+
+MANEUVER_DIR = CONFIG_DIR / "maneuvers"
+STEER_INPUTS = ("road_wheel", "steering_wheel")
+#: Tolerance on ``t >= duration`` so a tick time k*Tc that lands a rounding error short of the
+#: duration still ends the run (s; far below any control period).
+_TIME_EPS_S = 1e-9
+
+
+def _smooth_ramp(s: float) -> float:
+    """Linear 0 -> 1 ramp clipped to [0, 1]."""
+    return min(max(s, 0.0), 1.0)
+
+
+# ---------------------------------------------------------------- per-type parameters
+
+@dataclass(frozen=True)
+class StepSteerParams:
+    """ISO 7401 step steer: 0 until ``start_s``, linear ramp over ``ramp_time_s`` to
+    ``amplitude_rad``, then held. ISO 7401 asks for a 10-90 % rise within 0.15 s; the default
+    0.1 s ramp (0.08 s from 10 to 90 %) meets it."""
+
+    amplitude_rad: float = _spec("any")
+    start_s: float = _spec("nonnegative", default=0.5)
+    ramp_time_s: float = _spec("nonnegative", default=0.1)
+
+    def steer(self, t: float) -> float:
+        """Input angle (rad) at time ``t`` (s)."""
+        if self.ramp_time_s == 0.0:
+            return self.amplitude_rad if t >= self.start_s else 0.0
+        return self.amplitude_rad * _smooth_ramp((t - self.start_s) / self.ramp_time_s)
+
+    def phase(self, t: float) -> str:
+        """``settle`` before the step, ``steer`` during the ramp, then ``hold``."""
+        if t < self.start_s:
+            return "settle"
+        return "steer" if t < self.start_s + self.ramp_time_s else "hold"
+
+
+@dataclass(frozen=True)
+class RampSteerParams:
+    """Ramp steer (ch. 8, after Nalecz and Bindemann): from ``start_s`` the angle grows at
+    ``rate_radps`` until it reaches ``amplitude_rad``, then is held."""
+
+    amplitude_rad: float = _spec("any")
+    rate_radps: float = _spec()
+    start_s: float = _spec("nonnegative", default=0.5)
+
+    @property
+    def ramp_time_s(self) -> float:
+        """Duration of the ramp in s."""
+        return abs(self.amplitude_rad) / self.rate_radps
+
+    def steer(self, t: float) -> float:
+        """Input angle (rad) at time ``t`` (s)."""
+        if self.ramp_time_s == 0.0:
+            return self.amplitude_rad if t >= self.start_s else 0.0
+        return self.amplitude_rad * _smooth_ramp((t - self.start_s) / self.ramp_time_s)
+
+    def phase(self, t: float) -> str:
+        """``settle``, ``steer`` (ramping), ``hold``."""
+        if t < self.start_s:
+            return "settle"
+        return "steer" if t < self.start_s + self.ramp_time_s else "hold"
+
+
+@dataclass(frozen=True)
+class SlowRampSteerParams(RampSteerParams):
+    """ISO 4138 constant-speed method: steer increased slowly (default rate well under the
+    standard's quasi-steady limit) at constant speed; the run ends when
+    ``|a_y| >= max_lateral_accel_mps2`` or at the final angle's end of ``duration_s``."""
+
+    max_lateral_accel_mps2: float = _spec(default=8.0)
+
+
+@dataclass(frozen=True)
+class SineParams:
+    """ISO 7401 single-period sine: ``A sin(2 pi f (t - t0))`` for one period from ``start_s``,
+    zero before and after."""
+
+    amplitude_rad: float = _spec("any")
+    frequency_hz: float = _spec()
+    start_s: float = _spec("nonnegative", default=0.5)
+
+    def steer(self, t: float) -> float:
+        """Input angle (rad) at time ``t`` (s)."""
+        tau = t - self.start_s
+        if tau < 0.0 or tau > 1.0 / self.frequency_hz:
+            return 0.0
+        return self.amplitude_rad * math.sin(2.0 * math.pi * self.frequency_hz * tau)
+
+    def phase(self, t: float) -> str:
+        """``settle``, ``steer`` (the period), ``recover``."""
+        if t < self.start_s:
+            return "settle"
+        return "steer" if t <= self.start_s + 1.0 / self.frequency_hz else "recover"
+
+
+@dataclass(frozen=True)
+class SweptSineParams:
+    """Swept sine (chirp) for frequency response (ISO 7401 continuous sinusoidal input):
+    ``A sin(phi(tau))``, ``tau = t - start_s`` in [0, sweep_time_s], with instantaneous
+    frequency ``f(tau) = dphi/dtau / 2 pi`` going from ``f_start_hz`` to ``f_end_hz``,
+    linearly (``f0 + (f1 - f0) tau / T``) or logarithmically (``f0 (f1/f0)^(tau/T)``)."""
+
+    amplitude_rad: float = _spec("any")
+    f_start_hz: float = _spec()
+    f_end_hz: float = _spec()
+    sweep_time_s: float = _spec()
+    start_s: float = _spec("nonnegative", default=1.0)
+    spacing: str = "logarithmic"
+
+    def _check(self, source: str | None, prefix: str) -> None:
+        if self.spacing not in ("linear", "logarithmic"):
+            raise ParameterError(f"{prefix}spacing",
+                                 f"must be linear or logarithmic, got {self.spacing!r}", source)
+
+    def instantaneous_frequency_hz(self, t: float) -> float:
+        """``f(tau)`` in Hz (the analytic definition the phase integrates)."""
+        s = _smooth_ramp((t - self.start_s) / self.sweep_time_s)
+        if self.spacing == "linear":
+            return self.f_start_hz + (self.f_end_hz - self.f_start_hz) * s
+        return self.f_start_hz * (self.f_end_hz / self.f_start_hz) ** s
+
+    def phase_rad(self, tau: float) -> float:
+        """``phi(tau) = 2 pi \\int_0^tau f`` in rad."""
+        f0, f1, big_t = self.f_start_hz, self.f_end_hz, self.sweep_time_s
+        if self.spacing == "linear":
+            return 2.0 * math.pi * (f0 * tau + 0.5 * (f1 - f0) * tau * tau / big_t)
+        if f1 == f0:
+            return 2.0 * math.pi * f0 * tau
+        k = math.log(f1 / f0)
+        return 2.0 * math.pi * f0 * big_t * (math.exp(k * tau / big_t) - 1.0) / k
+
+    def steer(self, t: float) -> float:
+        """Input angle (rad) at time ``t`` (s)."""
+        tau = t - self.start_s
+        if tau < 0.0 or tau > self.sweep_time_s:
+            return 0.0
+        return self.amplitude_rad * math.sin(self.phase_rad(tau))
+
+    def phase(self, t: float) -> str:
+        """``settle``, ``sweep``, ``recover``."""
+        if t < self.start_s:
+            return "settle"
+        return "sweep" if t <= self.start_s + self.sweep_time_s else "recover"
+
+
+@dataclass(frozen=True)
+class RandomSteerParams:
+    """ISO 7401 random input: band-limited noise with power only within
+    [``f_low_hz``, ``f_high_hz``] (brick-wall filter in the frequency domain of seeded white
+    noise sampled at ``sample_rate_hz``), scaled to ``rms_rad``, faded in with a raised cosine
+    over ``fade_s`` from ``start_s`` and linearly interpolated between samples."""
+
+    rms_rad: float = _spec()
+    f_high_hz: float = _spec()
+    f_low_hz: float = _spec("nonnegative", default=0.0)
+    length_s: float = _spec(default=60.0)
+    seed: int = 0
+    start_s: float = _spec("nonnegative", default=1.0)
+    fade_s: float = _spec("nonnegative", default=1.0)
+    sample_rate_hz: float = _spec(default=200.0)
+
+    def _check(self, source: str | None, prefix: str) -> None:
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ParameterError(f"{prefix}seed", f"must be an integer >= 0, got {self.seed!r}",
+                                 source)
+        if self.f_high_hz <= self.f_low_hz:
+            raise ParameterError(f"{prefix}f_high_hz", "must be > f_low_hz", source)
+        if self.f_high_hz >= 0.5 * self.sample_rate_hz:
+            raise ParameterError(f"{prefix}f_high_hz", "must be below sample_rate_hz / 2",
+                                 source)
+
+    def samples(self) -> np.ndarray:
+        """The band-limited sequence (rad) at ``sample_rate_hz`` (before the fade-in)."""
+        n = int(round(self.length_s * self.sample_rate_hz)) + 1
+        rng = np.random.default_rng(self.seed)
+        spectrum = np.fft.rfft(rng.standard_normal(n))
+        freqs = np.fft.rfftfreq(n, d=1.0 / self.sample_rate_hz)
+        spectrum[(freqs < self.f_low_hz) | (freqs > self.f_high_hz)] = 0.0
+        signal = np.fft.irfft(spectrum, n)
+        signal -= signal.mean() if self.f_low_hz > 0.0 else 0.0
+        return signal * (self.rms_rad / float(np.sqrt(np.mean(signal * signal))))
+
+
+@dataclass(frozen=True)
+class PulseParams:
+    """ISO 7401 pulse input: a single pulse of ``width_s`` from ``start_s``, ``triangle``
+    (area A w / 2) or ``half_sine`` (area 2 A w / pi)."""
+
+    amplitude_rad: float = _spec("any")
+    width_s: float = _spec(default=0.4)
+    start_s: float = _spec("nonnegative", default=0.5)
+    shape: str = "triangle"
+
+    def _check(self, source: str | None, prefix: str) -> None:
+        if self.shape not in ("triangle", "half_sine"):
+            raise ParameterError(f"{prefix}shape",
+                                 f"must be triangle or half_sine, got {self.shape!r}", source)
+
+    def steer(self, t: float) -> float:
+        """Input angle (rad) at time ``t`` (s)."""
+        s = (t - self.start_s) / self.width_s
+        if s <= 0.0 or s >= 1.0:
+            return 0.0
+        if self.shape == "triangle":
+            return self.amplitude_rad * (1.0 - abs(2.0 * s - 1.0))
+        return self.amplitude_rad * math.sin(math.pi * s)
+
+    @property
+    def area_rad_s(self) -> float:
+        """Time integral of the pulse in rad s."""
+        if self.shape == "triangle":
+            return 0.5 * self.amplitude_rad * self.width_s
+        return 2.0 * self.amplitude_rad * self.width_s / math.pi
+
+    def phase(self, t: float) -> str:
+        """``settle``, ``pulse``, ``recover``."""
+        if t < self.start_s:
+            return "settle"
+        return "pulse" if t < self.start_s + self.width_s else "recover"
+
+
+@dataclass(frozen=True)
+class ConstantRadiusParams:
+    """ISO 4138 constant-radius method (closed loop): the path driver follows a circle of
+    ``radius_m`` (``direction`` left or right, tangent to the start pose) while the target
+    speed steps from the initial speed by ``speed_step_mps`` every ``dwell_s`` up to
+    ``final_speed_mps`` (quasi-steady: each step settles before the next). The run ends after
+    the last dwell, or aborts when the path error exceeds ``max_path_error_m`` (the car can no
+    longer hold the circle)."""
+
+    radius_m: float = _spec()
+    final_speed_mps: float = _spec()
+    speed_step_mps: float = _spec(default=1.0)
+    dwell_s: float = _spec(default=8.0)
+    direction: str = "left"
+    max_path_error_m: float = _spec(default=5.0)
+
+    def _check(self, source: str | None, prefix: str) -> None:
+        if self.direction not in ("left", "right"):
+            raise ParameterError(f"{prefix}direction",
+                                 f"must be left or right, got {self.direction!r}", source)
+
+
+@dataclass(frozen=True)
+class DoubleLaneChangeParams:
+    """ISO 3888-2 obstacle-avoidance lane change, driven by the preview path follower.
+
+    Track (ISO 3888-2:2011, Table 1; W = ``vehicle_width_m``; x = 0 at the entry of
+    section 1, y = 0 on its centre line, lane change to the left): section 1 x in [0, 12],
+    width 1.1 W + 0.25; section 2 (free) 13.5 m; section 3 x in [25.5, 36.5], width W + 1,
+    its right edge 1 m left of the left edge of section 1; section 4 (free) 12.5 m; section 5
+    x in [49, 61], width 1.3 W + 0.25 but at least 3 m, its right edge in line with that of
+    section 1. The reference path of the driver keeps y = 0 through section 1 up to
+    ``turn_in_x_m``, blends (raised cosine) to ``side_lane_target_m`` above the section-3 right
+    edge by ``side_lane_reach_x_m``, holds it, blends back to the centre of section 5 from
+    ``return_x_m`` to ``return_reach_x_m``. The run starts ``approach_m`` before section 1.
+    """
+
+    vehicle_width_m: float = _spec(default=1.7)
+    approach_m: float = _spec("nonnegative", default=30.0)
+    turn_in_x_m: float = _spec("any", default=7.0)
+    side_lane_reach_x_m: float = _spec("any", default=28.0)
+    side_lane_target_m: float = _spec("any", default=1.0)
+    return_x_m: float = _spec("any", default=34.0)
+    return_reach_x_m: float = _spec("any", default=54.0)
+
+    @property
+    def sections(self) -> list[tuple[float, float, float, float]]:
+        """Gated sections as (x_start, x_end, y_right, y_left) in m."""
+        w = self.vehicle_width_m
+        w1 = 1.1 * w + 0.25
+        w3 = w + 1.0
+        w5 = max(1.3 * w + 0.25, 3.0)
+        y3_right = 0.5 * w1 + 1.0
+        return [(0.0, 12.0, -0.5 * w1, 0.5 * w1),
+                (25.5, 36.5, y3_right, y3_right + w3),
+                (49.0, 61.0, -0.5 * w1, -0.5 * w1 + w5)]
+
+    def path(self) -> LanePath:
+        """The driver's reference path (earth frame, start at x = -approach_m)."""
+        (_, _, _, _), (_, _, y3r, _), (_, _, y5r, y5l) = self.sections
+        y_side = y3r + self.side_lane_target_m
+        y_exit = 0.5 * (y5r + y5l)
+        xs = (-self.approach_m, self.turn_in_x_m, self.side_lane_reach_x_m, self.return_x_m,
+              self.return_reach_x_m, 61.0 + 100.0)
+        ys = (0.0, 0.0, y_side, y_side, y_exit, y_exit)
+        return LanePath(xs, ys)
+
+    def _check(self, source: str | None, prefix: str) -> None:
+        xs = (-self.approach_m, self.turn_in_x_m, self.side_lane_reach_x_m, self.return_x_m,
+              self.return_reach_x_m, 161.0)
+        if any(b <= a for a, b in zip(xs, xs[1:])):
+            raise ParameterError(f"{prefix}turn_in_x_m",
+                                 "path knots must increase: -approach_m < turn_in_x_m < "
+                                 "side_lane_reach_x_m < return_x_m < return_reach_x_m < 161",
+                                 source)
+
+
+@dataclass(frozen=True)
+class BrakeInTurnParams:
+    """Braking in a turn (ch. 8, Figs. 8.23-8.27): ramp steer to ``amplitude_rad`` at
+    ``rate_radps`` from ``steer_start_s``; at ``brake_start_s`` a step brake torque meant to give
+    ``deceleration_mps2`` (default 0.3 g) is applied for ``brake_duration_s`` (1 s) — total
+    torque ``m R a`` (the paper applies a step torque, Fig. 8.23, not a deceleration
+    controller), split by the speed-hold ``brake_front_fraction``. No drive torque while
+    braking; afterwards the speed-hold driver holds the speed reached at the brake release."""
+
+    amplitude_rad: float = _spec("any")
+    rate_radps: float = _spec()
+    steer_start_s: float = _spec("nonnegative", default=0.5)
+    brake_start_s: float = _spec("nonnegative", default=2.0)
+    brake_duration_s: float = _spec(default=1.0)
+    deceleration_mps2: float = _spec(default=0.3 * GRAVITY_MPS2)
+
+    def steer(self, t: float) -> float:
+        """Input angle (rad) at time ``t`` (s)."""
+        ramp = abs(self.amplitude_rad) / self.rate_radps
+        if ramp == 0.0:
+            return self.amplitude_rad if t >= self.steer_start_s else 0.0
+        return self.amplitude_rad * _smooth_ramp((t - self.steer_start_s) / ramp)
+
+    def braking(self, t: float) -> bool:
+        """True while the brake torque is applied."""
+        return self.brake_start_s <= t < self.brake_start_s + self.brake_duration_s
+
+    def phase(self, t: float) -> str:
+        """``settle``, ``steer``, ``brake``, ``hold``."""
+        if t < self.steer_start_s:
+            return "settle"
+        if self.braking(t):
+            return "brake"
+        if t < self.brake_start_s:
+            return "steer"
+        return "hold"
+
+
+#: Maneuver type name -> parameter class.
+MANEUVER_TYPES: dict[str, type] = {
+    "step_steer": StepSteerParams,
+    "ramp_steer": RampSteerParams,
+    "sine": SineParams,
+    "swept_sine": SweptSineParams,
+    "random_steer": RandomSteerParams,
+    "pulse": PulseParams,
+    "slow_ramp_steer": SlowRampSteerParams,
+    "constant_radius": ConstantRadiusParams,
+    "double_lane_change": DoubleLaneChangeParams,
+    "brake_in_turn": BrakeInTurnParams,
+}
+_PATH_TYPES = ("constant_radius", "double_lane_change")
+_COMMON = ("name", "type", "description", "initial_speed_mps", "duration_s", "steer_input",
+           "speed_hold", "path_driver")
+
+
+@dataclass(frozen=True)
+class ManeuverSpec:
+    """A validated maneuver definition (vehicle independent; see the module docstring)."""
+
+    name: str
+    type: str
+    initial_speed_mps: float
+    duration_s: float
+    params: Any
+    steer_input: str = "road_wheel"
+    description: str = ""
+    speed_hold: SpeedHoldSpec = field(default_factory=SpeedHoldSpec)
+    path_driver: PathDriverSpec | None = None
+    source: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The file layout as a plain mapping (round-trips through :func:`load_maneuver_spec`)."""
+        out: dict[str, Any] = {
+            "name": self.name, "type": self.type, "description": self.description,
+            "initial_speed_mps": self.initial_speed_mps, "duration_s": self.duration_s,
+            "steer_input": self.steer_input,
+            "speed_hold": dataclasses.asdict(self.speed_hold),
+        }
+        if self.path_driver is not None:
+            out["path_driver"] = dataclasses.asdict(self.path_driver)
+        out.update(dataclasses.asdict(self.params))
+        return out
+
+
+def available_maneuvers() -> list[str]:
+    """Names (file stems) of the shipped maneuver files."""
+    return sorted(p.stem for p in MANEUVER_DIR.glob("*.yaml"))
+
+
+def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
+                               default_name: str = "maneuver") -> ManeuverSpec:
+    """Validate a maneuver mapping and build a :class:`ManeuverSpec`.
+
+    Raises
+    ------
+    UnknownNameError
+        ``type`` is not one of :data:`MANEUVER_TYPES`.
+    ParameterError
+        A field is missing, unknown, of the wrong type or out of range (names field and file).
+    """
+    if not isinstance(data, Mapping):
+        raise ParameterError("<root>", "maneuver must be a mapping", source)
+    if "type" not in data:
+        raise ParameterError("type", f"missing required field (valid: "
+                             f"{', '.join(sorted(MANEUVER_TYPES))})", source)
+    kind = data["type"]
+    if not isinstance(kind, str) or kind not in MANEUVER_TYPES:
+        raise UnknownNameError("maneuver type", str(kind), list(MANEUVER_TYPES))
+    name = data.get("name", default_name)
+    if not isinstance(name, str) or not name:
+        raise ParameterError("name", "must be a non-empty string", source)
+    common: dict[str, float] = {}
+    for key in ("initial_speed_mps", "duration_s"):
+        if key not in data:
+            raise ParameterError(key, "missing required field", source)
+        value = data[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            raise ParameterError(key, f"must be a finite number, got {value!r}", source)
+        common[key] = float(value)
+    if common["initial_speed_mps"] < 0.0:
+        raise ParameterError("initial_speed_mps", "must be >= 0", source)
+    if common["duration_s"] <= 0.0:
+        raise ParameterError("duration_s", "must be > 0", source)
+    steer_input = data.get("steer_input", "road_wheel")
+    if steer_input not in STEER_INPUTS:
+        raise ParameterError("steer_input",
+                             f"must be one of {', '.join(STEER_INPUTS)}, got {steer_input!r}",
+                             source)
+    if "path_driver" in data and kind not in _PATH_TYPES:
+        raise ParameterError("path_driver", f"only for {', '.join(_PATH_TYPES)}", source)
+    type_fields = {k: v for k, v in data.items() if k not in _COMMON}
+    params = _from_mapping(MANEUVER_TYPES[kind], type_fields, source, "")
+    if kind == "constant_radius" and params.final_speed_mps < common["initial_speed_mps"]:
+        raise ParameterError("final_speed_mps", "must be >= initial_speed_mps", source)
+    return ManeuverSpec(
+        name=name, type=kind, params=params, steer_input=steer_input,
+        description=str(data.get("description", "")),
+        speed_hold=speed_hold_spec_from(data.get("speed_hold"), source),
+        path_driver=(path_driver_spec_from(data.get("path_driver"), source)
+                     if kind in _PATH_TYPES else None),
+        source=source, **common)
+
+
+def resolve_maneuver_path(name_or_path: str | FilePath) -> FilePath:
+    """A maneuver name (file stem under ``config/maneuvers``) or a path, as a path."""
+    text = str(name_or_path)
+    path = FilePath(text)
+    if path.suffix in (".yaml", ".yml") or path.exists():
+        if not path.is_file():
+            raise ParameterError("maneuver", f"no such file {text!r}")
+        return path
+    candidate = MANEUVER_DIR / f"{text}.yaml"
+    if not candidate.is_file():
+        raise UnknownNameError("maneuver", text, available_maneuvers())
+    return candidate
+
+
+def load_maneuver_spec(name_path_or_mapping: str | FilePath | Mapping[str, Any]
+                       ) -> ManeuverSpec:
+    """Load a maneuver by name, YAML path, or an inline mapping (e.g. from a recorded run)."""
+    if isinstance(name_path_or_mapping, Mapping):
+        return maneuver_spec_from_mapping(name_path_or_mapping, "<inline maneuver>")
+    path = resolve_maneuver_path(name_path_or_mapping)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ParameterError("<file>", f"not valid YAML ({exc})", str(path)) from None
+    return maneuver_spec_from_mapping(data, str(path), default_name=path.stem)
+
+
+# ---------------------------------------------------------------------------- runtime
+
+class Maneuver:
+    """A maneuver bound to a vehicle, with its drivers' state (one instance per run).
+
+    Parameters
+    ----------
+    spec : ManeuverSpec
+        The validated definition.
+    vehicle : Vehicle
+        The simulated vehicle (steering ratio, mass, wheel radius, wheelbase, understeer).
+    """
+
+    def __init__(self, spec: ManeuverSpec, vehicle: Vehicle) -> None:
+        self.spec = spec
+        self.vehicle = vehicle
+        p = spec.params
+        if spec.steer_input == "steering_wheel":
+            vehicle.require("steering", user=f"maneuver {spec.name!r} (steer_input "
+                                             "steering_wheel)")
+        # Vehicles with no steering data report the hand-wheel angle equal to the road-wheel
+        # angle (ratio 1); they only run road-wheel inputs.
+        self._ratio = vehicle.steering.ratio if vehicle.steering is not None else 1.0
+        self._speed_driver = SpeedHoldDriver(spec.speed_hold, vehicle)
+        self._path_driver: PreviewPathDriver | None = None
+        self._random: np.ndarray | None = None
+        self._hold_after_brake_mps: float | None = None
+        self._aborted = ""
+        if spec.type == "constant_radius":
+            direction = 1 if p.direction == "left" else -1
+            assert spec.path_driver is not None
+            self._path_driver = PreviewPathDriver(spec.path_driver, vehicle,
+                                                  CirclePath(p.radius_m, direction))
+        elif spec.type == "double_lane_change":
+            assert spec.path_driver is not None
+            self._path_driver = PreviewPathDriver(spec.path_driver, vehicle, p.path())
+        elif spec.type == "random_steer":
+            self._random = p.samples()
+
+    # -- the interface -------------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        """Maneuver name."""
+        return self.spec.name
+
+    @property
+    def initial_speed_mps(self) -> float:
+        """Speed (m/s) the simulator is reset to."""
+        return self.spec.initial_speed_mps
+
+    @property
+    def duration_s(self) -> float:
+        """Planned duration in s (a run may end earlier, see :meth:`done`)."""
+        return self.spec.duration_s
+
+    @property
+    def initial_pose(self) -> tuple[float, float, float]:
+        """Start pose (x_m, y_m, heading_rad) in the earth frame."""
+        if self.spec.type == "double_lane_change":
+            return (-self.spec.params.approach_m, 0.0, 0.0)
+        return (0.0, 0.0, 0.0)
+
+    def steer_input(self, t: float) -> float:
+        """Open-loop input angle (rad, in the unit of ``steer_input``) at time ``t``."""
+        p = self.spec.params
+        if self.spec.type == "random_steer":
+            assert self._random is not None
+            tau = t - p.start_s
+            if tau <= 0.0:
+                return 0.0
+            fade = 1.0 if p.fade_s == 0.0 else 0.5 * (1.0 - math.cos(
+                math.pi * _smooth_ramp(tau / p.fade_s)))
+            return fade * float(np.interp(tau * p.sample_rate_hz,
+                                          np.arange(self._random.size), self._random))
+        return float(p.steer(t))
+
+    def target_speed_mps(self, t: float) -> float:
+        """Speed the speed-hold driver aims at (m/s)."""
+        p = self.spec.params
+        if self.spec.type == "constant_radius":
+            steps = math.floor((t + _TIME_EPS_S) / p.dwell_s)
+            return min(self.initial_speed_mps + steps * p.speed_step_mps, p.final_speed_mps)
+        if self._hold_after_brake_mps is not None:
+            return self._hold_after_brake_mps
+        return self.initial_speed_mps
+
+    def command(self, t: float, outputs: Mapping[str, Any]) -> DriverCommand:
+        """Driver command at tick time ``t`` (s) from the vehicle outputs (stateful)."""
+        speed = float(outputs["speed_mps"])
+        if self._path_driver is not None:
+            front = self._path_driver.steer(t, outputs)
+            hand = front * self._ratio
+        else:
+            angle = self.steer_input(t)
+            if self.spec.steer_input == "steering_wheel":
+                hand, front = angle, angle / self._ratio
+            else:
+                hand, front = angle * self._ratio, angle
+        if self.spec.type == "brake_in_turn":
+            p = self.spec.params
+            if p.braking(t):
+                self._speed_driver.command(t, speed, speed)  # keeps its clock, no integration
+                total = self.vehicle.chassis.mass_kg * self._wheel_radius() * p.deceleration_mps2
+                brake = split_brake_torque(total, self.spec.speed_hold.brake_front_fraction)
+                return DriverCommand(hand, front, 0.0, (0.0, 0.0, 0.0, 0.0), brake)
+            if t >= p.brake_start_s and self._hold_after_brake_mps is None:
+                self._hold_after_brake_mps = speed
+                self._speed_driver.reset()
+        drive, brake = self._speed_driver.command(t, speed, self.target_speed_mps(t))
+        return DriverCommand(hand, front, 0.0, drive, brake)
+
+    def _wheel_radius(self) -> float:
+        self.vehicle.require("body", user="maneuver brake_in_turn (brake torque m R a)")
+        assert self.vehicle.body is not None
+        return self.vehicle.body.wheel_radius_m
+
+    def phase(self, t: float) -> str:
+        """Name of the phase at time ``t`` (``done`` at or after the duration)."""
+        if self._aborted:
+            return "done"
+        if t >= self.duration_s - _TIME_EPS_S:
+            return "done"
+        kind, p = self.spec.type, self.spec.params
+        if kind == "random_steer":
+            return "settle" if t < p.start_s else "random"
+        if kind == "constant_radius":
+            return f"speed_{self.target_speed_mps(t):.2f}_mps"
+        if kind == "double_lane_change":
+            x = t * self.initial_speed_mps - p.approach_m
+            return "approach" if x < 0.0 else ("course" if x < 61.0 else "exit")
+        return p.phase(t)
+
+    def progress(self, t: float) -> float:
+        """Fraction of the planned duration elapsed, in [0, 1]."""
+        return min(max(t / self.duration_s, 0.0), 1.0)
+
+    @property
+    def abort_reason(self) -> str:
+        """Why the run ended early ('' if it did not)."""
+        return self._aborted
+
+    def done(self, t: float, outputs: Mapping[str, Any] | None = None) -> bool:
+        """True once the run may end: duration reached, or an end condition of the type."""
+        if self._aborted:
+            return True
+        if t >= self.duration_s - _TIME_EPS_S:
+            return True
+        if outputs is None:
+            return False
+        kind, p = self.spec.type, self.spec.params
+        if kind == "slow_ramp_steer":
+            if abs(float(outputs["lateral_accel_mps2"])) >= p.max_lateral_accel_mps2:
+                self._aborted = "lateral acceleration limit reached"
+        elif kind == "constant_radius" and self._path_driver is not None:
+            error = self._path_driver.path.lateral_error(float(outputs["x_m"]),
+                                                         float(outputs["y_m"]))
+            if abs(error) > p.max_path_error_m:
+                self._aborted = f"path error {error:.2f} m exceeds max_path_error_m"
+        return bool(self._aborted)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The maneuver definition as a plain mapping (for the run configuration)."""
+        return self.spec.to_dict()
+
+
+def make_maneuver(spec_or_name: ManeuverSpec | str | FilePath | Mapping[str, Any],
+                  vehicle: Vehicle) -> Maneuver:
+    """Build a runnable :class:`Maneuver` for ``vehicle`` from a spec, name, path or mapping."""
+    spec = (spec_or_name if isinstance(spec_or_name, ManeuverSpec)
+            else load_maneuver_spec(spec_or_name))
+    return Maneuver(spec, vehicle)
+
+
+__all__ = [
+    "BrakeInTurnParams", "ConstantRadiusParams", "DoubleLaneChangeParams", "DriverCommand",
+    "MANEUVER_DIR", "MANEUVER_TYPES", "Maneuver", "ManeuverSpec", "PulseParams",
+    "RampSteerParams", "RandomSteerParams", "STEER_INPUTS", "SineParams", "SlowRampSteerParams",
+    "StepSteerParams", "SweptSineParams", "available_maneuvers", "load_maneuver_spec",
+    "make_maneuver", "maneuver_spec_from_mapping", "resolve_maneuver_path",
+]

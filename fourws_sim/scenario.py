@@ -1,0 +1,323 @@
+"""Run scenarios: which vehicle, maneuver, laws, model, clock and recording, from YAML.
+
+A scenario file (``config/scenarios/<name>.yaml``)::
+
+    name: default
+    description: ...
+    vehicle: table_8_1            # vehicle name (config/vehicles stem) or YAML path
+    maneuver: step_steer_85kmh    # maneuver name, YAML path, or an inline mapping
+    laws: [fws, sol1, rwc2_3dof]  # one run per law
+    law_options: {}               # optional: {law name: {option: value}}
+    model: 8dof                   # fourws_sim.models name
+    tire: null                    # optional override of the vehicle's tire.model
+    integrator: rk4
+    clock_mode: lockstep          # lockstep | realtime
+    integration_step_s: 0.001
+    control_period_s: 0.01        # driver and controller rate (a multiple of the step)
+    state_period_s: 0.01          # state publish period (a multiple of the step)
+    belief:                       # the controllers' belief of the vehicle
+      vehicle: null               # null = the simulated vehicle
+      cornering_stiffness_scale_front: 1.0
+      cornering_stiffness_scale_rear: 1.0
+    recording:
+      enabled: true
+      output_dir: runs            # relative to the working directory
+      topics: all                 # or a list of topic names
+
+:func:`load_scenario` validates everything it can without building the run: names of the model,
+tire, integrator and laws are checked against their registries, the maneuver is loaded and
+validated, periods must be whole multiples of the integration step. Errors are
+:class:`~fourws_sim.errors.ParameterError` (field and file named) or
+:class:`~fourws_sim.errors.UnknownNameError` (valid names listed).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import yaml
+
+from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.maneuvers import ManeuverSpec, load_maneuver_spec, maneuver_spec_from_mapping
+from fourws_sim.params import CONFIG_DIR, Tire, Vehicle, load_vehicle
+
+SCENARIO_DIR = CONFIG_DIR / "scenarios"
+CLOCK_MODES = ("lockstep", "realtime")
+#: Relative tolerance for "period is a whole multiple of the integration step".
+_MULTIPLE_RTOL = 1e-9
+_TIRE_NAMES = ("linear", "sti", "magic_formula")
+_INTEGRATOR_NAMES = ("rk4", "solve_ivp")
+
+
+@dataclass(frozen=True)
+class BeliefSpec:
+    """The controllers' belief of the vehicle: another vehicle and/or scaled stiffnesses."""
+
+    vehicle: str | None = None
+    cornering_stiffness_scale_front: float = 1.0
+    cornering_stiffness_scale_rear: float = 1.0
+
+    def build(self, simulated: Vehicle) -> Vehicle:
+        """The belief vehicle (``simulated`` when no other vehicle is named), scaled."""
+        base = simulated if self.vehicle is None else load_vehicle(self.vehicle)
+        if self.cornering_stiffness_scale_front == 1.0 \
+                and self.cornering_stiffness_scale_rear == 1.0:
+            return base
+        return base.with_axle_tires(self.cornering_stiffness_scale_front,
+                                    self.cornering_stiffness_scale_rear)
+
+
+@dataclass(frozen=True)
+class RecordingSpec:
+    """Recording of a run: on/off, output folder and the topics (``"all"`` or a list)."""
+
+    enabled: bool = True
+    output_dir: str = "runs"
+    topics: str | tuple[str, ...] = "all"
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated run scenario (see the module docstring for the file layout)."""
+
+    name: str
+    vehicle: str
+    maneuver: ManeuverSpec
+    laws: tuple[str, ...] = ("fws",)
+    law_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    model: str = "8dof"
+    tire: str | None = None
+    integrator: str = "rk4"
+    clock_mode: str = "lockstep"
+    integration_step_s: float = 1e-3
+    control_period_s: float = 1e-2
+    state_period_s: float = 1e-2
+    belief: BeliefSpec = field(default_factory=BeliefSpec)
+    recording: RecordingSpec = field(default_factory=RecordingSpec)
+    description: str = ""
+    source: str = ""
+
+    def build_vehicle(self) -> Vehicle:
+        """The simulated vehicle, with the tire override applied."""
+        vehicle = load_vehicle(self.vehicle)
+        if self.tire is None:
+            return vehicle
+        tire = vehicle.tire if vehicle.tire is not None else Tire()
+        return dataclasses.replace(vehicle, tire=dataclasses.replace(tire, model=self.tire))
+
+    def build_belief(self, simulated: Vehicle) -> Vehicle:
+        """The controllers' belief vehicle for the simulated vehicle ``simulated``."""
+        return self.belief.build(simulated)
+
+    @property
+    def control_steps(self) -> int:
+        """Integration steps per control period."""
+        return int(round(self.control_period_s / self.integration_step_s))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The file layout as a plain mapping, with the maneuver inline (for recording)."""
+        rec = self.recording
+        return {
+            "name": self.name, "description": self.description, "vehicle": self.vehicle,
+            "maneuver": self.maneuver.to_dict(), "laws": list(self.laws),
+            "law_options": {k: dict(v) for k, v in self.law_options.items()},
+            "model": self.model, "tire": self.tire, "integrator": self.integrator,
+            "clock_mode": self.clock_mode, "integration_step_s": self.integration_step_s,
+            "control_period_s": self.control_period_s, "state_period_s": self.state_period_s,
+            "belief": dataclasses.asdict(self.belief),
+            "recording": {"enabled": rec.enabled, "output_dir": rec.output_dir,
+                          "topics": rec.topics if isinstance(rec.topics, str)
+                          else list(rec.topics)},
+        }
+
+
+_FIELDS = ("name", "description", "vehicle", "maneuver", "laws", "law_options", "model", "tire",
+           "integrator", "clock_mode", "integration_step_s", "control_period_s",
+           "state_period_s", "belief", "recording")
+
+
+def _number(data: Mapping[str, Any], key: str, default: float, source: str,
+            prefix: str = "") -> float:
+    value = data.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            or not math.isfinite(value) or value <= 0.0:
+        raise ParameterError(f"{prefix}{key}", f"must be a finite number > 0, got {value!r}",
+                             source)
+    return float(value)
+
+
+def _string(data: Mapping[str, Any], key: str, default: str | None, source: str,
+            prefix: str = "", allow_none: bool = False) -> str | None:
+    value = data.get(key, default)
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, str) or not value:
+        raise ParameterError(f"{prefix}{key}", f"must be a non-empty string, got {value!r}",
+                             source)
+    return value
+
+
+def _check_multiple(period: float, step: float, key: str, source: str) -> None:
+    ratio = period / step
+    if ratio < 1.0 - _MULTIPLE_RTOL or abs(ratio - round(ratio)) > _MULTIPLE_RTOL * ratio:
+        raise ParameterError(key, f"must be a whole multiple of integration_step_s ({step} s), "
+                             f"got {period} s", source)
+
+
+def _known_models() -> list[str]:
+    from fourws_sim.models import MODELS
+    return sorted(set(MODELS) | {"8dof"})
+
+
+def _known_laws() -> list[str]:
+    registry = importlib.import_module("fourws_control.registry")
+    return list(registry.LAWS)
+
+
+def scenario_from_mapping(data: Any, source: str = "<mapping>",
+                          default_name: str = "scenario") -> Scenario:
+    """Validate a scenario mapping and build a :class:`Scenario`.
+
+    Raises
+    ------
+    ParameterError
+        Missing, unknown or malformed field (named with the file).
+    UnknownNameError
+        Unknown vehicle, maneuver, model, tire, integrator or law name.
+    """
+    if not isinstance(data, Mapping):
+        raise ParameterError("<root>", "scenario must be a mapping", source)
+    unknown = sorted(set(data) - set(_FIELDS))
+    if unknown:
+        raise ParameterError(unknown[0], f"unknown field (valid: {', '.join(sorted(_FIELDS))})",
+                             source)
+    for key in ("vehicle", "maneuver"):
+        if key not in data:
+            raise ParameterError(key, "missing required field", source)
+    name = _string(data, "name", default_name, source)
+    vehicle = _string(data, "vehicle", None, source)
+    load_vehicle(vehicle)  # fail now on an unknown or malformed vehicle
+    maneuver_data = data["maneuver"]
+    if isinstance(maneuver_data, Mapping):
+        maneuver = maneuver_spec_from_mapping(maneuver_data, f"{source} (inline maneuver)")
+    elif isinstance(maneuver_data, str) and maneuver_data:
+        maneuver = load_maneuver_spec(maneuver_data)
+    else:
+        raise ParameterError("maneuver", "must be a maneuver name, a path or a mapping", source)
+
+    laws_data = data.get("laws", ["fws"])
+    if isinstance(laws_data, str):
+        laws_data = [laws_data]
+    if not isinstance(laws_data, (list, tuple)) or not laws_data \
+            or not all(isinstance(x, str) for x in laws_data):
+        raise ParameterError("laws", f"must be a non-empty list of law names, got {laws_data!r}",
+                             source)
+    known_laws = _known_laws()
+    for law in laws_data:
+        if law not in known_laws:
+            raise UnknownNameError("law", law, known_laws)
+    law_options = data.get("law_options") or {}
+    if not isinstance(law_options, Mapping) or not all(
+            isinstance(v, Mapping) for v in law_options.values()):
+        raise ParameterError("law_options", "must map law names to option mappings", source)
+    for law in law_options:
+        if law not in laws_data:
+            raise ParameterError(f"law_options.{law}", "names a law not in laws", source)
+
+    model = _string(data, "model", "8dof", source)
+    if model not in _known_models():
+        raise UnknownNameError("model", str(model), _known_models())
+    tire = _string(data, "tire", None, source, allow_none=True)
+    if tire is not None and tire not in _TIRE_NAMES:
+        raise UnknownNameError("tire", tire, list(_TIRE_NAMES))
+    integrator = _string(data, "integrator", "rk4", source)
+    if integrator not in _INTEGRATOR_NAMES:
+        raise UnknownNameError("integrator", str(integrator), list(_INTEGRATOR_NAMES))
+    clock = _string(data, "clock_mode", "lockstep", source)
+    if clock not in CLOCK_MODES:
+        raise ParameterError("clock_mode", f"must be one of {', '.join(CLOCK_MODES)}, "
+                             f"got {clock!r}", source)
+    step = _number(data, "integration_step_s", 1e-3, source)
+    control = _number(data, "control_period_s", 1e-2, source)
+    state = _number(data, "state_period_s", 1e-2, source)
+    _check_multiple(control, step, "control_period_s", source)
+    _check_multiple(state, step, "state_period_s", source)
+
+    belief_data = data.get("belief") or {}
+    if not isinstance(belief_data, Mapping):
+        raise ParameterError("belief", "must be a mapping", source)
+    bad = sorted(set(belief_data) - {f.name for f in dataclasses.fields(BeliefSpec)})
+    if bad:
+        raise ParameterError(f"belief.{bad[0]}", "unknown field (valid: vehicle, "
+                             "cornering_stiffness_scale_front, cornering_stiffness_scale_rear)",
+                             source)
+    belief_vehicle = _string(belief_data, "vehicle", None, source, "belief.", allow_none=True)
+    if belief_vehicle is not None:
+        load_vehicle(belief_vehicle)
+    belief = BeliefSpec(
+        vehicle=belief_vehicle,
+        cornering_stiffness_scale_front=_number(belief_data, "cornering_stiffness_scale_front",
+                                                1.0, source, "belief."),
+        cornering_stiffness_scale_rear=_number(belief_data, "cornering_stiffness_scale_rear",
+                                               1.0, source, "belief."))
+
+    rec_data = data.get("recording") or {}
+    if not isinstance(rec_data, Mapping):
+        raise ParameterError("recording", "must be a mapping", source)
+    bad = sorted(set(rec_data) - {"enabled", "output_dir", "topics"})
+    if bad:
+        raise ParameterError(f"recording.{bad[0]}",
+                             "unknown field (valid: enabled, output_dir, topics)", source)
+    enabled = rec_data.get("enabled", True)
+    if not isinstance(enabled, bool):
+        raise ParameterError("recording.enabled", "must be true or false", source)
+    output_dir = _string(rec_data, "output_dir", "runs", source, "recording.")
+    topics = rec_data.get("topics", "all")
+    if topics != "all":
+        if not isinstance(topics, (list, tuple)) or not topics or not all(
+                isinstance(t, str) and t.startswith("/") for t in topics):
+            raise ParameterError("recording.topics",
+                                 f"must be 'all' or a list of topic names, got {topics!r}",
+                                 source)
+        topics = tuple(topics)
+
+    return Scenario(
+        name=str(name), vehicle=str(vehicle), maneuver=maneuver, laws=tuple(laws_data),
+        law_options={k: dict(v) for k, v in law_options.items()}, model=str(model), tire=tire,
+        integrator=str(integrator), clock_mode=str(clock), integration_step_s=step,
+        control_period_s=control, state_period_s=state, belief=belief,
+        recording=RecordingSpec(enabled, str(output_dir), topics),
+        description=str(data.get("description", "")), source=source)
+
+
+def available_scenarios() -> list[str]:
+    """Names (file stems) of the shipped scenario files."""
+    return sorted(p.stem for p in SCENARIO_DIR.glob("*.yaml"))
+
+
+def load_scenario(path_or_name: str | Path | Mapping[str, Any] = "default") -> Scenario:
+    """Load and validate a scenario by name (``default``), YAML path or mapping."""
+    if isinstance(path_or_name, Mapping):
+        return scenario_from_mapping(path_or_name, "<inline scenario>")
+    text = str(path_or_name)
+    path = Path(text)
+    if not (path.suffix in (".yaml", ".yml") or path.exists()):
+        path = SCENARIO_DIR / f"{text}.yaml"
+        if not path.is_file():
+            raise UnknownNameError("scenario", text, available_scenarios())
+    if not path.is_file():
+        raise ParameterError("scenario", f"no such file {text!r}")
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ParameterError("<file>", f"not valid YAML ({exc})", str(path)) from None
+    return scenario_from_mapping(data, str(path), default_name=path.stem)
+
+
+__all__ = ["BeliefSpec", "CLOCK_MODES", "RecordingSpec", "SCENARIO_DIR", "Scenario",
+           "available_scenarios", "load_scenario", "scenario_from_mapping"]
