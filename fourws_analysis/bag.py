@@ -704,3 +704,47 @@ def _steering_ratio(config: Mapping[str, Any]) -> float | None:
         if isinstance(steering, Mapping) and isinstance(steering.get("ratio"), (int, float)):
             return float(steering["ratio"])
     return None
+
+
+def write_run(path: str | Path, time_s: np.ndarray, state: Mapping[str, np.ndarray],
+              config: Mapping[str, Any], driver: Mapping[str, np.ndarray] | None = None,
+              model: str = "") -> None:
+    """Write arrays of a run (e.g. an offline simulation) as a fourws bag.
+
+    Parameters
+    ----------
+    path : str or Path
+        Bag directory to create.
+    time_s : ndarray
+        Simulation time of each sample, s (becomes ``header.stamp``).
+    state : mapping of str to ndarray
+        ``VehicleState`` fields (scalars of shape (N,), per-wheel of shape (N, 4)).
+    config : mapping
+        The run configuration (``/fourws/run_config``).
+    driver : mapping of str to ndarray, optional
+        ``DriverInput`` fields on the same time grid.
+    model : str
+        ``VehicleState.model``.
+    """
+    store = typestore()
+    t = np.asarray(time_s, dtype=float)
+    topics = [(TOPIC_STATE, state)] + ([(TOPIC_DRIVER, driver)] if driver else [])
+    with BagWriter(path) as bag:
+        bag.write_run_config(config, 0)
+        for topic, values in topics:
+            msgtype = TOPIC_TYPES[topic]
+            msg = make_message(msgtype, header={"frame_id": "base_link"})
+            if topic == TOPIC_STATE:
+                msg.model = model
+            arrays = {k: np.asarray(v, dtype=float) for k, v in values.items()}
+            for i, ti in enumerate(t):
+                ns = int(round(ti * _NS_PER_S))
+                msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, _NS_PER_S)
+                if topic == TOPIC_STATE:
+                    msg.step = i
+                for key, arr in arrays.items():
+                    if arr.ndim == 1:
+                        setattr(msg, key, float(arr[i]))
+                    else:
+                        getattr(msg, key)[:] = arr[i]
+                bag.write_raw(topic, store.serialize_cdr(msg, msgtype), max(ns, 0))
