@@ -1,0 +1,144 @@
+r"""Numerical linearization of any fourws model about a trim, and eigenvalues vs speed.
+
+Central finite differences of the model's ``derivatives(t, x, u, p)``:
+
+.. math::
+
+    A_{:,j} = \frac{f(x + h_j e_j, u) - f(x - h_j e_j, u)}{2 h_j}, \qquad
+    B_{:,j} = \frac{f(x, u + h_j e_j) - f(x, u - h_j e_j)}{2 h_j},
+
+with :math:`h_j = \epsilon\,\max(|x_j|, 1)` and :math:`\epsilon = 10^{-6}` (about the cube
+root of machine precision scaled for the smooth tire curves; truncation error O(h^2)).
+For a linear model this reproduces ``(A, B)`` to rounding (tested).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from fourws_analysis.bag import MetricUnavailableError
+
+#: Relative finite-difference step.
+REL_STEP = 1e-6
+
+Derivatives = Callable[[float, np.ndarray, np.ndarray, Any], np.ndarray]
+
+
+def jacobians(derivatives: Derivatives, x0: np.ndarray, u0: np.ndarray, p: Any,
+              t: float = 0.0, rel_step: float = REL_STEP) -> tuple[np.ndarray, np.ndarray]:
+    """State and input Jacobians (A, B) of ``derivatives`` at ``(x0, u0)``.
+
+    Parameters
+    ----------
+    derivatives : callable
+        ``f(t, x, u, p) -> dx/dt``.
+    x0, u0 : ndarray
+        Trim state and input (model's ``STATE``/``INPUT`` order).
+    p : object
+        The model's parameter object.
+    t : float
+        Time, s (models are time-invariant; passed through).
+    rel_step : float
+        Relative step.
+    """
+    x0 = np.asarray(x0, dtype=float)
+    u0 = np.asarray(u0, dtype=float)
+
+    def column(vec: np.ndarray, j: int, which: str) -> np.ndarray:
+        h = rel_step * max(abs(vec[j]), 1.0)
+        plus, minus = vec.copy(), vec.copy()
+        plus[j] += h
+        minus[j] -= h
+        if which == "x":
+            fp, fm = derivatives(t, plus, u0, p), derivatives(t, minus, u0, p)
+        else:
+            fp, fm = derivatives(t, x0, plus, p), derivatives(t, x0, minus, p)
+        return (np.asarray(fp, dtype=float) - np.asarray(fm, dtype=float)) / (2.0 * h)
+
+    a = np.column_stack([column(x0, j, "x") for j in range(x0.size)])
+    b = np.column_stack([column(u0, j, "u") for j in range(u0.size)]) if u0.size else \
+        np.zeros((x0.size, 0))
+    return a, b
+
+
+@dataclass
+class EigenSweep:
+    """Eigenvalues of a linearized model over forward speed.
+
+    Attributes
+    ----------
+    model : str
+    speed_mps : ndarray (n_speeds,)
+    eigenvalues : ndarray (n_speeds, n_states) of complex, 1/s
+    """
+
+    model: str
+    speed_mps: np.ndarray
+    eigenvalues: np.ndarray
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"model": self.model, "speed_mps": self.speed_mps.tolist(),
+                "eigenvalues_re_per_s": self.eigenvalues.real.tolist(),
+                "eigenvalues_im_per_s": self.eigenvalues.imag.tolist()}
+
+
+def _trim(mod: Any, vehicle: Any, speed: float) -> tuple[np.ndarray, np.ndarray, Any]:
+    """Straight-running trim of a model at ``speed``: (x0, u0, p)."""
+    try:
+        p = mod.params_for(vehicle, speed)
+        linear = True
+    except TypeError:
+        p = mod.params_for(vehicle)
+        linear = False
+    n_x, n_u = len(mod.STATE), len(mod.INPUT)
+    if linear:
+        return np.zeros(n_x), np.zeros(n_u), p
+    for name in ("trim_state", "straight_state", "initial_state"):
+        fn = getattr(mod, name, None)
+        if fn is not None:
+            x0 = np.asarray(fn(vehicle, speed) if name != "initial_state" else
+                            fn(p, speed), dtype=float)
+            return x0, np.zeros(n_u), p
+    raise MetricUnavailableError(
+        f"eigenvalues vs speed: model {mod.__name__} has no straight-running trim function "
+        "(trim_state/straight_state/initial_state)")
+
+
+def eigenvalues_vs_speed(vehicle: Any, speeds_mps: Sequence[float], model: str = "8dof",
+                         drop_zero: bool = True) -> EigenSweep:
+    """Eigenvalues of ``model`` linearized at straight running for each speed.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    speeds_mps : sequence of float
+        Forward speeds, m/s.
+    model : str
+        Model name (any registered model).
+    drop_zero : bool
+        Keep the zero eigenvalues (heading, position) out? They are padded with NaN so every
+        row has the same length.
+
+    Raises
+    ------
+    MetricUnavailableError
+        If the model cannot be trimmed.
+    UnknownNameError
+        Unknown model name.
+    """
+    from fourws_sim.models import get_model
+
+    mod = get_model(model)
+    rows = []
+    for speed in speeds_mps:
+        x0, u0, p = _trim(mod, vehicle, float(speed))
+        a, _ = jacobians(mod.derivatives, x0, u0, p)
+        ev = np.linalg.eigvals(a)
+        if drop_zero:
+            ev = np.where(np.abs(ev) < 1e-9, np.nan, ev)
+        rows.append(ev[np.argsort(-np.nan_to_num(ev.real, nan=-np.inf))])
+    return EigenSweep(model, np.asarray(speeds_mps, dtype=float), np.array(rows))
