@@ -1,0 +1,816 @@
+r"""Nonlinear 8-DOF spread-tire vehicle model (Samsundar 1996, ch. 8, eqs. 8.1-8.51; re-derived).
+
+Degrees of freedom: longitudinal U, lateral V, yaw r, sprung-mass roll :math:`\phi` (angle and
+rate p), the spin :math:`\omega_i` of each of the four wheels; plus the earth-frame pose
+(X, Y, heading :math:`\psi`), two load-transfer acceleration states and four tire-lag states.
+Axes are ISO 8855 / REP-103 (x forward, y left, z up; r and steer positive to the left;
+:math:`\phi` positive right side down, so a left turn rolls the body to :math:`\phi > 0`).
+The paper's chapter 8 uses SAE-like signs (its roll angle is negative in a positive turn,
+Figure 8.6); every equation below is re-derived in fourws axes.
+
+Equations of motion
+-------------------
+The sprung mass :math:`m_s` (CG a height h above the roll axis, at the longitudinal position of
+the total CG) rolls about a body-fixed roll axis; the unsprung mass moves with the yawing frame.
+Velocity of the sprung CG in the yawing frame is :math:`(U + r h \sin\phi,\;
+V - h p\cos\phi)`, which gives (:math:`c = \cos\phi`, :math:`s = \sin\phi`)
+
+.. math::
+
+    m(\dot U - V r) + m_s h (s\,\dot r + 2 r p c) &= \textstyle\sum F_x \\
+    m(\dot V + U r) - m_s h c\,\dot p + m_s h s (p^2 + r^2) &= \textstyle\sum F_y \\
+    I_z \dot r - I_{xz} \dot p &= \textstyle\sum N \\
+    I_x \dot p - I_{xz} \dot r - m_s h c (\dot V + U r)
+        &= m_s g h s - (K_{\phi f} + K_{\phi r})\phi - (C_{\phi f} + C_{\phi r}) p
+
+(eqs. 8.1-8.4 and 8.14; the paper linearizes the trigonometric terms and writes a single
+Coriolis term). :math:`I_x` is about the roll axis, as in the 3-DOF model (ch. 6), so the
+linearized V-r-phi block is exactly ``fourws_sim.models.roll3dof``. The symmetric 3x3 system
+in :math:`\dot V, \dot r, \dot p` is solved in closed form, then :math:`\dot U`.
+Pose: :math:`\dot X = U\cos\psi - V\sin\psi`, :math:`\dot Y = U\sin\psi + V\cos\psi`,
+:math:`\dot\psi = r` (eqs. 8.15-8.17).
+
+Wheels (eqs. 8.5-8.8): :math:`I_w \dot\omega_i = T_{d,i} - R F_{x,i} + T_{f,i}` with the
+friction torque of brake plus rolling resistance, capacity
+:math:`T_{c,i} = T_{b,i} + f_r F_{z,i} R`, applied as a *clamped viscous* torque
+:math:`T_{f,i} = -\mathrm{sign}(\omega_i) \min(T_{c,i}, I_w |\omega_i| / \tau_b)`: exactly
+Coulomb friction while the wheel turns faster than :math:`T_c\tau_b/I_w`, and a stiff linear
+hold below it, so a braked wheel decays to (not through) zero, a locked wheel stays locked
+(it creeps at :math:`\omega = R|F_x|\tau_b/I_w`, a few per cent of slip) and nothing chatters
+with a fixed step. :math:`\tau_b` = :data:`BRAKE_HOLD_TIME_S`; a brake cannot spin a wheel
+backwards.
+
+Geometry (eqs. 8.32-8.50)
+-------------------------
+Road-wheel angles: :math:`\delta_{f} = \delta_{f,cmd} + \varepsilon_f\phi`,
+:math:`\delta_{r} = \delta_{r,cmd} + \varepsilon_r\phi` (8.32/8.33); the front command is the
+steering-wheel angle over the steering ratio (:func:`road_wheel_angle`). Wheel i at
+:math:`(x_i, y_i)` = FL (a, T_f/2), FR (a, -T_f/2), RL (-b, T_r/2), RR (-b, -T_r/2) has the
+centre velocity :math:`(U - r y_i, V + r x_i)` (8.34-8.38), rotated by the road-wheel angle
+into the wheel frame :math:`(v_x, v_y)`. Slip angle and slip ratio (8.39-8.46) with a
+regularized denominator (:data:`V_MIN_DEFAULT_MPS`, see :func:`params_for`):
+
+.. math::
+
+    \alpha_i = \operatorname{atan2}(v_{y,i}, \max(|v_{x,i}|, v_{min})), \qquad
+    \kappa_i = \frac{\omega_i R - v_{x,i}}{\max(|v_{x,i}|, v_{min})}.
+
+At rest both are exactly 0, so a car at rest with no input stays at rest; below
+:math:`v_{min}` the tires act as stiff viscous dampers, which brings the car to rest smoothly.
+
+Tire forces :math:`(F_x, F_y, M_z)` come from the vehicle's tire model in the wheel frame and
+are rotated by the road-wheel angle into the body frame; aligning moments add to the yaw
+moment. With ``tire.relaxation_length_m`` :math:`\sigma > 0` the tire sees a lagged slip
+angle, :math:`\dot\alpha_{l,i} = (\max(|v_{x,i}|, v_{min})/\sigma)(\alpha_i - \alpha_{l,i})`
+(first-order stretched-string lag, ch. 5); with :math:`\sigma = 0` those four states are inert.
+
+Normal loads (Figures 8.3/8.4, eqs. 8.18-8.31)
+----------------------------------------------
+Static :math:`mgb/2L` front, :math:`mga/2L` rear per tire; longitudinal transfer
+:math:`m a_x h_{cg} / L` from front to rear axle; lateral transfer on axle i (to the right
+wheel, from the left)
+
+.. math::
+
+    \Delta F_{z,i} = \frac{K_{\phi i}\phi + C_{\phi i} p + m_i\,(m_s/m)\,h_{rc,i}\,a_y
+                     + m_i\,(m_u/m)\,h_u\,a_y}{T_i},
+
+with :math:`m_i` the axle's share of the mass (:math:`mb/L` front) — the suspension roll
+moment plus the load carried through the roll centre and the unsprung mass. In a steady turn
+this equals the paper's moment balance (8.22-8.27). The accelerations :math:`a_x, a_y` used
+here are first-order lagged copies of :math:`\dot U - V r` and :math:`\dot V + U r`
+(time constant :data:`LOAD_TRANSFER_TIME_S`): this stands in for the pitch/heave dynamics the
+model leaves out and removes the algebraic loop between loads, tire forces and accelerations.
+Loads are clamped at 0 (a lifted wheel has no force).
+
+Rolling resistance (``tire.rolling_resistance`` :math:`f_r`, default 0) is a torque
+:math:`f_r F_z R` opposing wheel spin (part of the clamped friction torque above).
+
+Two implementations: :func:`derivatives` is the readable NumPy reference (the model contract);
+:func:`make_kernels` builds the numba-compiled right-hand side and fixed-step integrator loops
+for one tire function, which :mod:`fourws_sim.simulator` uses. ``test/test_eightdof.py`` checks
+they agree to round-off.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+from types import ModuleType
+from typing import Any, Callable, NamedTuple
+
+import numpy as np
+
+from fourws_sim.errors import ParameterError
+from fourws_sim.params import GRAVITY_MPS2, Vehicle
+
+
+class STATE(IntEnum):
+    """State components of the 8-DOF model (SI units)."""
+
+    U = 0  #: longitudinal velocity of the CG, body frame, m/s
+    V = 1  #: lateral velocity of the CG, body frame, m/s (positive left)
+    R = 2  #: yaw rate, rad/s (positive left)
+    PHI = 3  #: sprung-mass roll angle, rad (positive right side down)
+    P = 4  #: roll rate, rad/s
+    OMEGA_FL = 5  #: wheel spin front left, rad/s (positive rolling forward)
+    OMEGA_FR = 6  #: wheel spin front right, rad/s
+    OMEGA_RL = 7  #: wheel spin rear left, rad/s
+    OMEGA_RR = 8  #: wheel spin rear right, rad/s
+    X = 9  #: earth-frame x of the CG, m
+    Y = 10  #: earth-frame y of the CG, m
+    PSI = 11  #: heading, rad
+    AX_LT = 12  #: lagged longitudinal acceleration used for load transfer, m/s^2
+    AY_LT = 13  #: lagged lateral acceleration used for load transfer, m/s^2
+    ALPHA_FL = 14  #: lagged slip angle front left (relaxation length), rad
+    ALPHA_FR = 15  #: lagged slip angle front right, rad
+    ALPHA_RL = 16  #: lagged slip angle rear left, rad
+    ALPHA_RR = 17  #: lagged slip angle rear right, rad
+
+
+class INPUT(IntEnum):
+    """Input components of the 8-DOF model (SI units)."""
+
+    DELTA_F = 0  #: commanded front road-wheel angle (steering-wheel angle / ratio), rad
+    DELTA_R = 1  #: commanded rear road-wheel angle, rad
+    STEER_TORQUE = 2  #: driver steering torque, N m (unused: fixed steering control)
+    DRIVE_FL = 3  #: drive torque front left, N m (positive forward)
+    DRIVE_FR = 4  #: drive torque front right, N m
+    DRIVE_RL = 5  #: drive torque rear left, N m
+    DRIVE_RR = 6  #: drive torque rear right, N m
+    BRAKE_FL = 7  #: brake torque front left, N m (>= 0, opposes spin)
+    BRAKE_FR = 8  #: brake torque front right, N m
+    BRAKE_RL = 9  #: brake torque rear left, N m
+    BRAKE_RR = 10  #: brake torque rear right, N m
+
+
+class PARAM(IntEnum):
+    """Slots of the packed float64 parameter array used by the compiled kernels."""
+
+    M = 0  #: total mass, kg
+    MS = 1  #: sprung mass, kg
+    IZ = 2  #: yaw inertia, kg m^2
+    IX = 3  #: roll inertia of the sprung mass about the roll axis, kg m^2
+    IXZ = 4  #: roll-yaw product of inertia, kg m^2
+    A = 5  #: CG to front axle, m
+    B = 6  #: CG to rear axle, m
+    TF = 7  #: front track, m
+    TR = 8  #: rear track, m
+    H_CG = 9  #: total CG height, m
+    H_ROLL = 10  #: sprung CG above the roll axis, m
+    H_RC_F = 11  #: front roll-centre height, m
+    H_RC_R = 12  #: rear roll-centre height, m
+    H_U = 13  #: unsprung CG height, m
+    R_W = 14  #: wheel radius, m
+    I_W = 15  #: wheel spin inertia, kg m^2
+    K_PHI_F = 16  #: front roll stiffness, N m/rad
+    K_PHI_R = 17  #: rear roll stiffness, N m/rad
+    C_PHI_F = 18  #: front roll damping, N m s/rad
+    C_PHI_R = 19  #: rear roll damping, N m s/rad
+    EPS_F = 20  #: front roll steer, rad/rad
+    EPS_R = 21  #: rear roll steer, rad/rad
+    MU = 22  #: road friction passed to the tire model
+    F_RR = 23  #: rolling-resistance coefficient
+    SIGMA = 24  #: relaxation length, m (0 = no lag)
+    V_MIN = 25  #: slip-denominator floor, m/s
+    TAU_LT = 26  #: load-transfer lag, s
+    TAU_B = 27  #: brake hold time constant, s
+    G = 28  #: gravity, m/s^2
+
+
+N_STATE = len(STATE)
+N_INPUT = len(INPUT)
+N_PARAM = len(PARAM)
+
+#: Wheel names in fourws order.
+WHEELS = ("FL", "FR", "RL", "RR")
+
+#: Lag of the accelerations that drive load transfer, s. Short against the handling time
+#: scales (yaw/roll ~0.1-1 s) and long against the 1 ms step (RK4-stable for steps < ~25 ms).
+LOAD_TRANSFER_TIME_S = 0.01
+#: Time constant of the clamped-viscous friction hold of brakes and rolling resistance, s.
+#: RK4 stays stable with it for steps up to ~5 ms; smaller values hold a locked wheel closer to
+#: zero spin but stiffen the wheel equation.
+BRAKE_HOLD_TIME_S = 2.0e-3
+#: Smallest slip denominator, m/s (see :func:`params_for` for how it is raised for stiff tires).
+V_MIN_DEFAULT_MPS = 1.0
+#: Step for which :func:`params_for` sizes ``v_min`` so the wheel-spin equation stays inside
+#: RK4's stability region (|lambda dt| <= this bound), s and dimensionless.
+_REFERENCE_STEP_S = 1.0e-3
+_RK4_REAL_BOUND = 1.5
+
+# Output slots of the per-call auxiliary array (filled by the kernels, used by outputs()).
+_AUX_FZ = 0
+_AUX_ALPHA = 4
+_AUX_KAPPA = 8
+_AUX_FX = 12
+_AUX_FY = 16
+_AUX_MZ = 20
+_AUX_DELTA_F = 24
+_AUX_DELTA_R = 25
+_AUX_AX = 26
+_AUX_AY = 27
+N_AUX = 28
+
+
+class Aux(NamedTuple):
+    """Per-wheel quantities computed alongside the derivative (arrays in order FL, FR, RL, RR).
+
+    Attributes
+    ----------
+    fz_n, alpha_rad, kappa, fx_n, fy_n, mz_nm : numpy.ndarray
+        Normal load (N), slip angle seen by the tire (rad), slip ratio, tire-frame
+        longitudinal and lateral force (N), aligning moment (N m).
+    delta_f_rad, delta_r_rad : float
+        Road-wheel angles actually applied (command plus roll steer), rad.
+    ax_mps2, ay_mps2 : float
+        Acceleration of the CG, :math:`\\dot U - V r` and :math:`\\dot V + U r`, m/s^2.
+    """
+
+    fz_n: np.ndarray
+    alpha_rad: np.ndarray
+    kappa: np.ndarray
+    fx_n: np.ndarray
+    fy_n: np.ndarray
+    mz_nm: np.ndarray
+    delta_f_rad: float
+    delta_r_rad: float
+    ax_mps2: float
+    ay_mps2: float
+
+
+@dataclass(frozen=True)
+class Params:
+    """Parameters of the 8-DOF model.
+
+    Attributes
+    ----------
+    arr : numpy.ndarray
+        Packed float64 parameters, slots named by :class:`PARAM` (SI units).
+    coeffs_front, coeffs_rear : numpy.ndarray
+        Tire coefficient arrays of one front and one rear tire (the tire module's ``pack``).
+    tire_name : str
+        Tire model name (key of ``fourws_sim.tires.TIRES``).
+    tire : module
+        The tire module (its ``forces`` is called by :func:`derivatives`).
+    steering_ratio : float
+        Steering-wheel angle per front road-wheel angle (1.0 when the vehicle has none).
+    """
+
+    arr: np.ndarray
+    coeffs_front: np.ndarray
+    coeffs_rear: np.ndarray
+    tire_name: str
+    tire: ModuleType
+    steering_ratio: float
+
+    def __getitem__(self, key: PARAM) -> float:
+        return float(self.arr[key])
+
+
+def road_wheel_angle(steering_wheel_angle_rad: float, vehicle: Vehicle) -> float:
+    """Front road-wheel angle in rad from the steering-wheel angle in rad (eq. 8.32).
+
+    ``delta_f = delta_sw / K_sr`` with the steering ratio ``steering.ratio`` (Table 8.1:
+    16.3). The roll-steer part of eq. 8.32 is added inside the model.
+
+    Raises
+    ------
+    ParameterError
+        If the vehicle has no ``steering`` subsystem.
+    """
+    vehicle.require("steering", user="road_wheel_angle")
+    return float(steering_wheel_angle_rad) / vehicle.steering.ratio  # type: ignore[union-attr]
+
+
+def steering_wheel_angle(road_wheel_angle_rad: float, vehicle: Vehicle) -> float:
+    """Steering-wheel angle in rad for a front road-wheel angle in rad (inverse of
+    :func:`road_wheel_angle`)."""
+    vehicle.require("steering", user="steering_wheel_angle")
+    return float(road_wheel_angle_rad) * vehicle.steering.ratio  # type: ignore[union-attr]
+
+
+def _tire_module(vehicle: Vehicle, tire: str | None) -> tuple[str, ModuleType]:
+    from fourws_sim.tires import get_tire
+
+    name = tire if tire is not None else (vehicle.tire.model if vehicle.tire else "linear")
+    return name, get_tire(name)
+
+
+def params_for(vehicle: Vehicle, tire: str | None = None, *,
+               v_min_mps: float | None = None) -> Params:
+    """Build the 8-DOF parameters of ``vehicle``.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Needs ``roll`` and ``body`` (and optionally ``tire``, ``steering``).
+    tire : str, optional
+        Tire model name overriding ``vehicle.tire.model`` (``linear`` when it has none).
+    v_min_mps : float, optional
+        Slip-denominator floor in m/s. Default: the larger of :data:`V_MIN_DEFAULT_MPS` and
+        the speed below which the wheel-spin equation of the stiffest tire at 1.5 x static
+        load would leave RK4's stable region at a 1 ms step,
+        ``v = R^2 C_s dt / (1.5 I_w)`` with ``C_s`` the tire's small-slip longitudinal
+        stiffness (the wheel's slip dynamics have the eigenvalue ``-R^2 C_s / (I_w v)``).
+
+    Raises
+    ------
+    ParameterError
+        If ``roll`` or ``body`` is missing, or ``v_min_mps`` is not finite and > 0.
+    UnknownNameError
+        If the tire model name is unknown.
+    """
+    vehicle.require("roll", "body", user="8dof model")
+    tire_name, module = _tire_module(vehicle, tire)
+    c, rl, bd = vehicle.chassis, vehicle.roll, vehicle.body
+    assert rl is not None and bd is not None
+    tr = vehicle.tire
+    coeffs_f = np.ascontiguousarray(module.pack(vehicle, "front"), dtype=np.float64)
+    coeffs_r = np.ascontiguousarray(module.pack(vehicle, "rear"), dtype=np.float64)
+    if rl.sprung_mass_kg > c.mass_kg:
+        raise ParameterError("roll.sprung_mass_kg", "must not exceed chassis.mass_kg",
+                             vehicle.source or vehicle.name)
+    arr = np.zeros(N_PARAM)
+    P = PARAM
+    arr[P.M] = c.mass_kg
+    arr[P.MS] = rl.sprung_mass_kg
+    arr[P.IZ] = c.yaw_inertia_kgm2
+    arr[P.IX] = rl.roll_inertia_kgm2
+    arr[P.IXZ] = rl.roll_yaw_product_kgm2
+    arr[P.A] = c.cg_to_front_axle_m
+    arr[P.B] = c.cg_to_rear_axle_m
+    arr[P.TF] = bd.track_front_m
+    arr[P.TR] = bd.track_rear_m
+    arr[P.H_CG] = bd.cg_height_m
+    arr[P.H_ROLL] = rl.roll_arm_m
+    arr[P.H_RC_F] = bd.roll_centre_height_front_m
+    arr[P.H_RC_R] = bd.roll_centre_height_rear_m
+    arr[P.H_U] = bd.unsprung_cg_height_m
+    arr[P.R_W] = bd.wheel_radius_m
+    arr[P.I_W] = bd.wheel_spin_inertia_kgm2
+    arr[P.K_PHI_F] = rl.roll_stiffness_front_nm_per_rad
+    arr[P.K_PHI_R] = rl.roll_stiffness_rear_nm_per_rad
+    arr[P.C_PHI_F] = rl.roll_damping_front_nms_per_rad
+    arr[P.C_PHI_R] = rl.roll_damping_rear_nms_per_rad
+    arr[P.EPS_F] = rl.roll_steer_front
+    arr[P.EPS_R] = rl.roll_steer_rear
+    arr[P.MU] = tr.friction_coefficient if tr is not None else 1.0
+    arr[P.F_RR] = tr.rolling_resistance if tr is not None else 0.0
+    arr[P.SIGMA] = tr.relaxation_length_m if tr is not None else 0.0
+    arr[P.TAU_LT] = LOAD_TRANSFER_TIME_S
+    arr[P.TAU_B] = BRAKE_HOLD_TIME_S
+    arr[P.G] = GRAVITY_MPS2
+    if v_min_mps is None:
+        m, g, a, b = c.mass_kg, GRAVITY_MPS2, c.cg_to_front_axle_m, c.cg_to_rear_axle_m
+        fz_max = 1.5 * m * g * max(a, b) / (2.0 * (a + b))
+        c_s = max(_longitudinal_stiffness(module, coeffs_f, fz_max, arr[P.MU]),
+                  _longitudinal_stiffness(module, coeffs_r, fz_max, arr[P.MU]))
+        v_need = bd.wheel_radius_m ** 2 * c_s * _REFERENCE_STEP_S / (
+            _RK4_REAL_BOUND * bd.wheel_spin_inertia_kgm2)
+        v_min_mps = max(V_MIN_DEFAULT_MPS, v_need)
+    if not (math.isfinite(v_min_mps) and v_min_mps > 0.0):
+        raise ParameterError("v_min_mps", f"must be finite and > 0, got {v_min_mps!r}")
+    arr[P.V_MIN] = v_min_mps
+    ratio = vehicle.steering.ratio if vehicle.steering is not None else 1.0
+    return Params(arr, coeffs_f, coeffs_r, tire_name, module, float(ratio))
+
+
+def _longitudinal_stiffness(module: ModuleType, coeffs: np.ndarray, fz: float,
+                            mu: float) -> float:
+    """Small-slip ``dFx/dkappa`` of one tire in N (central difference at 20 m/s)."""
+    h = 1.0e-5
+    fp = module.forces(fz, 0.0, h, 20.0, mu, coeffs)[0]
+    fm = module.forces(fz, 0.0, -h, 20.0, mu, coeffs)[0]
+    return abs(fp - fm) / (2.0 * h)
+
+
+def initial_state(p: Params, speed_mps: float = 0.0) -> np.ndarray:
+    """State of straight running at ``speed_mps`` (m/s): wheels spinning at U/R, all else 0."""
+    x = np.zeros(N_STATE)
+    x[STATE.U] = speed_mps
+    x[STATE.OMEGA_FL:STATE.OMEGA_RR + 1] = speed_mps / p.arr[PARAM.R_W]
+    return x
+
+
+# ---------------------------------------------------------------------------------------------
+# Readable NumPy reference
+# ---------------------------------------------------------------------------------------------
+
+def _solve_body(m: float, ms_h_c: float, iz: float, ixz: float, ix: float,
+                fy: float, n: float, l: float) -> tuple[float, float, float]:
+    """Solve ``[[m, 0, -msh c], [0, Iz, -Ixz], [-msh c, -Ixz, Ix]] [V', r', p'] = rhs``."""
+    # p' by eliminating V' and r' (Schur complement on the roll row)
+    det = ix - ms_h_c * ms_h_c / m - ixz * ixz / iz
+    pd = (l + ms_h_c * fy / m + ixz * n / iz) / det
+    vd = (fy + ms_h_c * pd) / m
+    rd = (n + ixz * pd) / iz
+    return vd, rd, pd
+
+
+def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndarray, Aux]:
+    """State derivative and per-wheel quantities (NumPy reference; see the module docstring).
+
+    Parameters
+    ----------
+    t : float
+        Time in s (the model is time invariant).
+    x : numpy.ndarray
+        State, :class:`STATE` order.
+    u : numpy.ndarray
+        Input, :class:`INPUT` order.
+    p : Params
+        From :func:`params_for`.
+
+    Returns
+    -------
+    dx : numpy.ndarray
+        dx/dt in :class:`STATE` order (SI).
+    aux : Aux
+        Loads, slips and tire forces of this evaluation.
+    """
+    S, I, P = STATE, INPUT, PARAM
+    q = p.arr
+    x = np.asarray(x, dtype=float)
+    u = np.asarray(u, dtype=float)
+    U, V, r, phi, pr, psi = x[S.U], x[S.V], x[S.R], x[S.PHI], x[S.P], x[S.PSI]
+    omega = x[S.OMEGA_FL:S.OMEGA_RR + 1]
+    m, ms, g = q[P.M], q[P.MS], q[P.G]
+    a, b, L = q[P.A], q[P.B], q[P.A] + q[P.B]
+    tf, tr = q[P.TF], q[P.TR]
+    rw, iw = q[P.R_W], q[P.I_W]
+    h = q[P.H_ROLL]
+    mu_ = m - ms
+    vmin = q[P.V_MIN]
+
+    # road-wheel angles with roll steer (8.32, 8.33)
+    delta_f = u[I.DELTA_F] + q[P.EPS_F] * phi
+    delta_r = u[I.DELTA_R] + q[P.EPS_R] * phi
+    delta = np.array([delta_f, delta_f, delta_r, delta_r])
+
+    # normal loads: static + longitudinal + lateral transfer (Figures 8.3, 8.4)
+    ax_lt, ay_lt = x[S.AX_LT], x[S.AY_LT]
+    static = m * g / (2.0 * L) * np.array([b, b, a, a])
+    d_long = m * ax_lt * q[P.H_CG] / L
+    m_front, m_rear = m * b / L, m * a / L
+    d_lat_f = (q[P.K_PHI_F] * phi + q[P.C_PHI_F] * pr
+               + m_front * (ms / m) * q[P.H_RC_F] * ay_lt
+               + m_front * (mu_ / m) * q[P.H_U] * ay_lt) / tf
+    d_lat_r = (q[P.K_PHI_R] * phi + q[P.C_PHI_R] * pr
+               + m_rear * (ms / m) * q[P.H_RC_R] * ay_lt
+               + m_rear * (mu_ / m) * q[P.H_U] * ay_lt) / tr
+    fz = static + np.array([-0.5 * d_long, -0.5 * d_long, 0.5 * d_long, 0.5 * d_long]) \
+        + np.array([-d_lat_f, d_lat_f, -d_lat_r, d_lat_r])
+    fz = np.maximum(fz, 0.0)
+
+    # wheel-centre velocities (8.34-8.38), wheel frame, slips (8.39-8.46)
+    xw = np.array([a, a, -b, -b])
+    yw = np.array([0.5 * tf, -0.5 * tf, 0.5 * tr, -0.5 * tr])
+    vx_b = U - r * yw
+    vy_b = V + r * xw
+    cd, sd = np.cos(delta), np.sin(delta)
+    vx = vx_b * cd + vy_b * sd
+    vy = -vx_b * sd + vy_b * cd
+    den = np.maximum(np.abs(vx), vmin)
+    alpha = np.arctan2(vy, den)
+    kappa = (omega * rw - vx) / den
+    sigma = q[P.SIGMA]
+    alpha_lag = x[S.ALPHA_FL:S.ALPHA_RR + 1]
+    alpha_tire = alpha_lag if sigma > 0.0 else alpha
+
+    fx = np.zeros(4)
+    fy = np.zeros(4)
+    mz = np.zeros(4)
+    for i in range(4):
+        coeffs = p.coeffs_front if i < 2 else p.coeffs_rear
+        fx[i], fy[i], mz[i] = p.tire.forces(float(fz[i]), float(alpha_tire[i]),
+                                            float(kappa[i]), float(abs(vx[i])),
+                                            float(q[P.MU]), coeffs)
+
+    # body-frame forces and moments (8.9-8.13)
+    fxb = fx * cd - fy * sd
+    fyb = fx * sd + fy * cd
+    sum_fx = fxb.sum()
+    sum_fy = fyb.sum()
+    sum_n = np.sum(xw * fyb - yw * fxb) + mz.sum()
+
+    c, s = math.cos(phi), math.sin(phi)
+    msh = ms * h
+    k_phi = q[P.K_PHI_F] + q[P.K_PHI_R]
+    c_phi = q[P.C_PHI_F] + q[P.C_PHI_R]
+    rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
+    rhs_l = msh * c * U * r + msh * g * s - k_phi * phi - c_phi * pr
+    vd, rd, pd = _solve_body(m, msh * c, q[P.IZ], q[P.IXZ], q[P.IX], rhs_y, sum_n, rhs_l)
+    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
+
+    # wheel spin (8.5-8.8) with the clamped-viscous friction torque
+    cap = np.maximum(u[I.BRAKE_FL:I.BRAKE_RR + 1], 0.0) + q[P.F_RR] * fz * rw
+    hold = iw * np.abs(omega) / q[P.TAU_B]
+    t_fric = -np.sign(omega) * np.minimum(cap, hold)
+    omegad = (u[I.DRIVE_FL:I.DRIVE_RR + 1] - rw * fx + t_fric) / iw
+
+    ax = ud - V * r
+    ay = vd + U * r
+    dx = np.zeros(N_STATE)
+    dx[S.U] = ud
+    dx[S.V] = vd
+    dx[S.R] = rd
+    dx[S.PHI] = pr
+    dx[S.P] = pd
+    dx[S.OMEGA_FL:S.OMEGA_RR + 1] = omegad
+    dx[S.X] = U * math.cos(psi) - V * math.sin(psi)
+    dx[S.Y] = U * math.sin(psi) + V * math.cos(psi)
+    dx[S.PSI] = r
+    dx[S.AX_LT] = (ax - ax_lt) / q[P.TAU_LT]
+    dx[S.AY_LT] = (ay - ay_lt) / q[P.TAU_LT]
+    if sigma > 0.0:
+        dx[S.ALPHA_FL:S.ALPHA_RR + 1] = den / sigma * (alpha - alpha_lag)
+    aux = Aux(fz, alpha_tire.copy(), kappa, fx, fy, mz, float(delta_f), float(delta_r),
+              float(ax), float(ay))
+    return dx, aux
+
+
+def derivatives(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
+    """State derivative dx/dt of the 8-DOF model (NumPy reference, :class:`STATE` order, SI).
+
+    See :func:`evaluate` for the parameters and the module docstring for the equations.
+    """
+    return evaluate(t, x, u, p)[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# Compiled kernels
+# ---------------------------------------------------------------------------------------------
+
+class Kernels(NamedTuple):
+    """Numba-compiled functions of the 8-DOF model for one tire function.
+
+    Attributes
+    ----------
+    rhs : callable
+        ``rhs(x, u, q, cf, cr, dx, aux)``: writes dx/dt into ``dx`` and the per-wheel
+        quantities (slots ``_AUX_*``) into ``aux``.
+    rk4 : callable
+        ``rk4(x, u, q, cf, cr, dt, n) -> k``: advances ``x`` in place by ``n`` RK4 steps of
+        ``dt`` s; returns ``n`` or, if a state became non-finite, the index of that step
+        (``x`` then holds the last finite state).
+    euler : callable
+        Same contract with explicit Euler.
+    """
+
+    rhs: Callable[..., Any]
+    rk4: Callable[..., Any]
+    euler: Callable[..., Any]
+
+
+_KERNEL_CACHE: dict[str, Kernels] = {}
+
+
+def kernels_for(tire_name: str) -> Kernels:
+    """Compiled kernels for the tire model ``tire_name`` (built once per process)."""
+    if tire_name not in _KERNEL_CACHE:
+        from fourws_sim.tires import get_tire
+
+        _KERNEL_CACHE[tire_name] = make_kernels(get_tire(tire_name).forces)
+    return _KERNEL_CACHE[tire_name]
+
+
+def make_kernels(tire_forces: Callable[..., tuple[float, float, float]]) -> Kernels:
+    """Compile the 8-DOF right-hand side and integrator loops around ``tire_forces``.
+
+    Parameters
+    ----------
+    tire_forces : callable
+        A tire module's ``forces(fz, alpha, kappa, vx, mu, coeffs)`` (plain Python that numba
+        can compile, or an already compiled dispatcher).
+
+    Returns
+    -------
+    Kernels
+    """
+    import numba
+
+    if isinstance(tire_forces, numba.core.dispatcher.Dispatcher):
+        tire = tire_forces
+    else:
+        tire = numba.njit(cache=True, fastmath=False)(tire_forces)
+
+    i_u, i_v, i_r, i_phi, i_p = int(STATE.U), int(STATE.V), int(STATE.R), int(STATE.PHI), \
+        int(STATE.P)
+    i_w0, i_x, i_y, i_psi = int(STATE.OMEGA_FL), int(STATE.X), int(STATE.Y), int(STATE.PSI)
+    i_ax, i_ay, i_al0 = int(STATE.AX_LT), int(STATE.AY_LT), int(STATE.ALPHA_FL)
+    j_df, j_dr, j_d0, j_b0 = int(INPUT.DELTA_F), int(INPUT.DELTA_R), int(INPUT.DRIVE_FL), \
+        int(INPUT.BRAKE_FL)
+    P = PARAM
+    k_m, k_ms, k_iz, k_ix, k_ixz = int(P.M), int(P.MS), int(P.IZ), int(P.IX), int(P.IXZ)
+    k_a, k_b, k_tf, k_tr, k_hcg = int(P.A), int(P.B), int(P.TF), int(P.TR), int(P.H_CG)
+    k_h, k_rcf, k_rcr, k_hu = int(P.H_ROLL), int(P.H_RC_F), int(P.H_RC_R), int(P.H_U)
+    k_rw, k_iw, k_kf, k_kr = int(P.R_W), int(P.I_W), int(P.K_PHI_F), int(P.K_PHI_R)
+    k_cf, k_cr, k_ef, k_er = int(P.C_PHI_F), int(P.C_PHI_R), int(P.EPS_F), int(P.EPS_R)
+    k_mu, k_frr, k_sig, k_vmin = int(P.MU), int(P.F_RR), int(P.SIGMA), int(P.V_MIN)
+    k_tlt, k_tb, k_g = int(P.TAU_LT), int(P.TAU_B), int(P.G)
+    n_state = N_STATE
+    a_fz, a_al, a_ka, a_fx, a_fy, a_mz = _AUX_FZ, _AUX_ALPHA, _AUX_KAPPA, _AUX_FX, _AUX_FY, \
+        _AUX_MZ
+    a_df, a_dr, a_ax, a_ay = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY
+
+    @numba.njit(cache=True)
+    def rhs(x, u, q, cf, cr, dx, aux):  # pragma: no cover - compiled
+        U = x[i_u]
+        V = x[i_v]
+        r = x[i_r]
+        phi = x[i_phi]
+        pr = x[i_p]
+        psi = x[i_psi]
+        m = q[k_m]
+        ms = q[k_ms]
+        g = q[k_g]
+        a = q[k_a]
+        b = q[k_b]
+        L = a + b
+        tf = q[k_tf]
+        tr = q[k_tr]
+        rw = q[k_rw]
+        iw = q[k_iw]
+        vmin = q[k_vmin]
+        sigma = q[k_sig]
+        mu = q[k_mu]
+        mu_ = m - ms
+        delta_f = u[j_df] + q[k_ef] * phi
+        delta_r = u[j_dr] + q[k_er] * phi
+        ax_lt = x[i_ax]
+        ay_lt = x[i_ay]
+        d_long = 0.5 * m * ax_lt * q[k_hcg] / L
+        m_front = m * b / L
+        m_rear = m * a / L
+        d_lat_f = (q[k_kf] * phi + q[k_cf] * pr + m_front * (ms / m) * q[k_rcf] * ay_lt
+                   + m_front * (mu_ / m) * q[k_hu] * ay_lt) / tf
+        d_lat_r = (q[k_kr] * phi + q[k_cr] * pr + m_rear * (ms / m) * q[k_rcr] * ay_lt
+                   + m_rear * (mu_ / m) * q[k_hu] * ay_lt) / tr
+        st_f = m * g * b / (2.0 * L)
+        st_r = m * g * a / (2.0 * L)
+        cdf = math.cos(delta_f)
+        sdf = math.sin(delta_f)
+        cdr = math.cos(delta_r)
+        sdr = math.sin(delta_r)
+        sum_fx = 0.0
+        sum_fy = 0.0
+        sum_n = 0.0
+        for i in range(4):
+            if i < 2:
+                xw = a
+                cd = cdf
+                sd = sdf
+                fz = st_f - d_long
+                dl = d_lat_f
+                yw = 0.5 * tf
+            else:
+                xw = -b
+                cd = cdr
+                sd = sdr
+                fz = st_r + d_long
+                dl = d_lat_r
+                yw = 0.5 * tr
+            if i == 0 or i == 2:
+                fz -= dl
+            else:
+                fz += dl
+                yw = -yw
+            if fz < 0.0:
+                fz = 0.0
+            vxb = U - r * yw
+            vyb = V + r * xw
+            vx = vxb * cd + vyb * sd
+            vy = -vxb * sd + vyb * cd
+            avx = abs(vx)
+            den = avx if avx > vmin else vmin
+            alpha = math.atan2(vy, den)
+            om = x[i_w0 + i]
+            kappa = (om * rw - vx) / den
+            if sigma > 0.0:
+                al_lag = x[i_al0 + i]
+                dx[i_al0 + i] = den / sigma * (alpha - al_lag)
+                alpha_t = al_lag
+            else:
+                dx[i_al0 + i] = 0.0
+                alpha_t = alpha
+            if i < 2:
+                fx, fy, mz = tire(fz, alpha_t, kappa, avx, mu, cf)
+            else:
+                fx, fy, mz = tire(fz, alpha_t, kappa, avx, mu, cr)
+            fxb = fx * cd - fy * sd
+            fyb = fx * sd + fy * cd
+            sum_fx += fxb
+            sum_fy += fyb
+            sum_n += xw * fyb - yw * fxb + mz
+            brake = u[j_b0 + i]
+            if brake < 0.0:
+                brake = 0.0
+            cap = brake + q[k_frr] * fz * rw
+            hold = iw * abs(om) / q[k_tb]
+            tfric = cap if cap < hold else hold
+            if om > 0.0:
+                tfric = -tfric
+            elif om == 0.0:
+                tfric = 0.0
+            dx[i_w0 + i] = (u[j_d0 + i] - rw * fx + tfric) / iw
+            aux[a_fz + i] = fz
+            aux[a_al + i] = alpha_t
+            aux[a_ka + i] = kappa
+            aux[a_fx + i] = fx
+            aux[a_fy + i] = fy
+            aux[a_mz + i] = mz
+        c = math.cos(phi)
+        s = math.sin(phi)
+        msh = ms * q[k_h]
+        mshc = msh * c
+        iz = q[k_iz]
+        ixz = q[k_ixz]
+        rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
+        rhs_l = (mshc * U * r + msh * g * s - (q[k_kf] + q[k_kr]) * phi
+                 - (q[k_cf] + q[k_cr]) * pr)
+        det = q[k_ix] - mshc * mshc / m - ixz * ixz / iz
+        pd = (rhs_l + mshc * rhs_y / m + ixz * sum_n / iz) / det
+        vd = (rhs_y + mshc * pd) / m
+        rd = (sum_n + ixz * pd) / iz
+        ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
+        ax = ud - V * r
+        ay = vd + U * r
+        dx[i_u] = ud
+        dx[i_v] = vd
+        dx[i_r] = rd
+        dx[i_phi] = pr
+        dx[i_p] = pd
+        cps = math.cos(psi)
+        sps = math.sin(psi)
+        dx[i_x] = U * cps - V * sps
+        dx[i_y] = U * sps + V * cps
+        dx[i_psi] = r
+        dx[i_ax] = (ax - ax_lt) / q[k_tlt]
+        dx[i_ay] = (ay - ay_lt) / q[k_tlt]
+        aux[a_df] = delta_f
+        aux[a_dr] = delta_r
+        aux[a_ax] = ax
+        aux[a_ay] = ay
+
+    @numba.njit(cache=True)
+    def rk4(x, u, q, cf, cr, dt, n):  # pragma: no cover - compiled
+        k1 = np.empty(n_state)
+        k2 = np.empty(n_state)
+        k3 = np.empty(n_state)
+        k4 = np.empty(n_state)
+        xt = np.empty(n_state)
+        aux = np.empty(N_AUX)
+        half = 0.5 * dt
+        sixth = dt / 6.0
+        for step in range(n):
+            rhs(x, u, q, cf, cr, k1, aux)
+            for j in range(n_state):
+                xt[j] = x[j] + half * k1[j]
+            rhs(xt, u, q, cf, cr, k2, aux)
+            for j in range(n_state):
+                xt[j] = x[j] + half * k2[j]
+            rhs(xt, u, q, cf, cr, k3, aux)
+            for j in range(n_state):
+                xt[j] = x[j] + dt * k3[j]
+            rhs(xt, u, q, cf, cr, k4, aux)
+            ok = True
+            for j in range(n_state):
+                xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+                if not math.isfinite(xt[j]):
+                    ok = False
+            if not ok:
+                return step
+            for j in range(n_state):
+                x[j] = xt[j]
+        return n
+
+    @numba.njit(cache=True)
+    def euler(x, u, q, cf, cr, dt, n):  # pragma: no cover - compiled
+        k1 = np.empty(n_state)
+        xt = np.empty(n_state)
+        aux = np.empty(N_AUX)
+        for step in range(n):
+            rhs(x, u, q, cf, cr, k1, aux)
+            ok = True
+            for j in range(n_state):
+                xt[j] = x[j] + dt * k1[j]
+                if not math.isfinite(xt[j]):
+                    ok = False
+            if not ok:
+                return step
+            for j in range(n_state):
+                x[j] = xt[j]
+        return n
+
+    return Kernels(rhs, rk4, euler)
+
+
+def aux_from_array(aux: np.ndarray) -> Aux:
+    """Unpack the compiled kernels' auxiliary array into an :class:`Aux`."""
+    return Aux(aux[_AUX_FZ:_AUX_FZ + 4].copy(), aux[_AUX_ALPHA:_AUX_ALPHA + 4].copy(),
+               aux[_AUX_KAPPA:_AUX_KAPPA + 4].copy(), aux[_AUX_FX:_AUX_FX + 4].copy(),
+               aux[_AUX_FY:_AUX_FY + 4].copy(), aux[_AUX_MZ:_AUX_MZ + 4].copy(),
+               float(aux[_AUX_DELTA_F]), float(aux[_AUX_DELTA_R]), float(aux[_AUX_AX]),
+               float(aux[_AUX_AY]))
