@@ -19,57 +19,24 @@ measured on a test surface, and ``mu`` scales it (1.0 = the test surface).
 
 from __future__ import annotations
 
-import importlib
 from types import ModuleType
 
 import numpy as np
 
 from fourws_sim.errors import UnknownNameError
+from fourws_sim.tires import linear, magic_formula, sti
 
-#: Tire model name -> module path. Modules are imported on first use.
-_MODULES = {
-    "linear": "fourws_sim.tires.linear",
-    "sti": "fourws_sim.tires.sti",
-    "magic_formula": "fourws_sim.tires.magic_formula",
+#: Registry of tire models, name -> module: ``TIRES["sti"].forces(...)``.
+TIRES: dict[str, ModuleType] = {
+    "linear": linear,
+    "sti": sti,
+    "magic_formula": magic_formula,
 }
 
 #: Step of the central difference used by :func:`cornering_stiffness`, rad.
 _STIFFNESS_STEP_RAD = 1.0e-5
 #: Forward speed at which :func:`cornering_stiffness` evaluates the tire, m/s.
 _STIFFNESS_SPEED_MPS = 20.0
-
-
-class _Registry(dict):
-    """Name -> tire module, importing each module lazily on first access."""
-
-    def __missing__(self, name: str) -> ModuleType:
-        if name not in _MODULES:
-            raise UnknownNameError("tire model", name, list(_MODULES))
-        module = importlib.import_module(_MODULES[name])
-        self[name] = module
-        return module
-
-    def __contains__(self, name: object) -> bool:
-        return name in _MODULES
-
-    def __iter__(self):  # type: ignore[no-untyped-def]
-        return iter(_MODULES)
-
-    def __len__(self) -> int:
-        return len(_MODULES)
-
-    def keys(self):  # type: ignore[no-untyped-def]
-        return _MODULES.keys()
-
-    def items(self):  # type: ignore[no-untyped-def]
-        return [(name, self[name]) for name in _MODULES]
-
-    def values(self):  # type: ignore[no-untyped-def]
-        return [self[name] for name in _MODULES]
-
-
-#: Registry of tire models: ``TIRES["sti"].forces(...)``.
-TIRES: dict[str, ModuleType] = _Registry()
 
 
 def get_tire(name: str) -> ModuleType:
@@ -80,9 +47,10 @@ def get_tire(name: str) -> ModuleType:
     UnknownNameError
         If ``name`` is not one of ``linear``, ``magic_formula``, ``sti``.
     """
-    if name not in _MODULES:
-        raise UnknownNameError("tire model", name, list(_MODULES))
-    return TIRES[name]
+    try:
+        return TIRES[name]
+    except KeyError:
+        raise UnknownNameError("tire model", name, list(TIRES)) from None
 
 
 def cornering_stiffness(name: str, coeffs: np.ndarray, fz_n: float, mu: float = 1.0) -> float:
@@ -105,4 +73,4 @@ def cornering_stiffness(name: str, coeffs: np.ndarray, fz_n: float, mu: float = 
     h = _STIFFNESS_STEP_RAD
     _, fy_plus, _ = forces(fz_n, h, 0.0, _STIFFNESS_SPEED_MPS, mu, coeffs)
     _, fy_minus, _ = forces(fz_n, -h, 0.0, _STIFFNESS_SPEED_MPS, mu, coeffs)
-    return -(fy_plus - fy_minus) / (2.0 * h)
+    return float(-(fy_plus - fy_minus) / (2.0 * h))
