@@ -89,10 +89,11 @@ PACEJKA_205_60R15: dict[str, float] = {
 }
 
 #: Coefficients that are shifts or left/right asymmetries (ply-steer, conicity, the Mz offset
-#: of SSZ1 and the residual torque QDZ6/7): zero in :data:`DEFAULTS`.
+#: of SSZ1, the residual torque QDZ6/7, the sign-dependent trail curvature QEZ4):
+#: zero in :data:`DEFAULTS`.
 SHIFT_KEYS = ("PHX1", "PHX2", "PVX1", "PVX2", "PHY1", "PHY2", "PVY1", "PVY2", "PEY3",
               "RBY3", "RHX1", "RHY1", "RHY2", "RVY1", "RVY2", "QHZ1", "QHZ2", "QDZ6", "QDZ7",
-              "SSZ1")
+              "QEZ4", "SSZ1")
 
 #: fourws defaults: Table A3.1 with the shift/asymmetry coefficients set to zero. The vehicle
 #: models mount the same tire on the left and the right without mirroring it, so the published
