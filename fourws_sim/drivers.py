@@ -166,11 +166,13 @@ class SpeedHoldDriver:
         if not self.spec.enabled or self._radius_m <= 0.0:
             return zeros, zeros
         error = target_mps - speed_mps
-        request = self.spec.kp_per_s * error + self.spec.ki_per_s2 * self._integral_m
-        saturated = request > self.spec.max_accel_mps2 or request < -self.spec.max_decel_mps2
-        if not saturated:
-            self._integral_m += error * dt
-        request = min(max(request, -self.spec.max_decel_mps2), self.spec.max_accel_mps2)
+        integral = self._integral_m + error * dt
+        request = self.spec.kp_per_s * error + self.spec.ki_per_s2 * integral
+        if -self.spec.max_decel_mps2 <= request <= self.spec.max_accel_mps2:
+            self._integral_m = integral
+        else:  # saturated: hold the integrator (conditional integration)
+            request = self.spec.kp_per_s * error + self.spec.ki_per_s2 * self._integral_m
+            request = min(max(request, -self.spec.max_decel_mps2), self.spec.max_accel_mps2)
         total_nm = self._mass_kg * self._radius_m * (request + self._rolling * GRAVITY_MPS2)
         if total_nm >= 0.0:
             wheels = _DRIVEN[self.spec.driven_axle]

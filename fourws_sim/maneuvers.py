@@ -82,7 +82,7 @@ class StepSteerParams:
     def steer(self, t: float) -> float:
         """Input angle (rad) at time ``t`` (s)."""
         if self.ramp_time_s == 0.0:
-            return self.amplitude_rad if t >= self.start_s else 0.0
+            return self.amplitude_rad if t >= self.start_s - _TIME_EPS_S else 0.0
         return self.amplitude_rad * _smooth_ramp((t - self.start_s) / self.ramp_time_s)
 
     def phase(self, t: float) -> str:
@@ -109,7 +109,7 @@ class RampSteerParams:
     def steer(self, t: float) -> float:
         """Input angle (rad) at time ``t`` (s)."""
         if self.ramp_time_s == 0.0:
-            return self.amplitude_rad if t >= self.start_s else 0.0
+            return self.amplitude_rad if t >= self.start_s - _TIME_EPS_S else 0.0
         return self.amplitude_rad * _smooth_ramp((t - self.start_s) / self.ramp_time_s)
 
     def phase(self, t: float) -> str:
@@ -303,15 +303,16 @@ class ConstantRadiusParams:
 class DoubleLaneChangeParams:
     """ISO 3888-2 obstacle-avoidance lane change, driven by the preview path follower.
 
-    Track (ISO 3888-2:2011, Table 1; W = ``vehicle_width_m``; x = 0 at the entry of
-    section 1, y = 0 on its centre line, lane change to the left): section 1 x in [0, 12],
+    Track (ISO 3888-2:2011, Table 1; W = ``vehicle_width_m``; the car starts at x = 0, y = 0
+    heading +x, section 1 begins ``approach_m`` = x0 ahead, y = 0 on its centre line, lane
+    change to the left; positions below relative to x0): section 1 x in [0, 12],
     width 1.1 W + 0.25; section 2 (free) 13.5 m; section 3 x in [25.5, 36.5], width W + 1,
     its right edge 1 m left of the left edge of section 1; section 4 (free) 12.5 m; section 5
     x in [49, 61], width 1.3 W + 0.25 but at least 3 m, its right edge in line with that of
     section 1. The reference path of the driver keeps y = 0 through section 1 up to
     ``turn_in_x_m``, blends (raised cosine) to ``side_lane_target_m`` above the section-3 right
     edge by ``side_lane_reach_x_m``, holds it, blends back to the centre of section 5 from
-    ``return_x_m`` to ``return_reach_x_m``. The run starts ``approach_m`` before section 1.
+    ``return_x_m`` to ``return_reach_x_m`` (all knots relative to x0).
     """
 
     vehicle_width_m: float = _spec(default=1.7)
@@ -324,23 +325,25 @@ class DoubleLaneChangeParams:
 
     @property
     def sections(self) -> list[tuple[float, float, float, float]]:
-        """Gated sections as (x_start, x_end, y_right, y_left) in m."""
+        """Gated sections as (x_start, x_end, y_right, y_left) in m (earth frame)."""
+        x0 = self.approach_m
         w = self.vehicle_width_m
         w1 = 1.1 * w + 0.25
         w3 = w + 1.0
         w5 = max(1.3 * w + 0.25, 3.0)
         y3_right = 0.5 * w1 + 1.0
-        return [(0.0, 12.0, -0.5 * w1, 0.5 * w1),
-                (25.5, 36.5, y3_right, y3_right + w3),
-                (49.0, 61.0, -0.5 * w1, -0.5 * w1 + w5)]
+        return [(x0, x0 + 12.0, -0.5 * w1, 0.5 * w1),
+                (x0 + 25.5, x0 + 36.5, y3_right, y3_right + w3),
+                (x0 + 49.0, x0 + 61.0, -0.5 * w1, -0.5 * w1 + w5)]
 
     def path(self) -> LanePath:
-        """The driver's reference path (earth frame, start at x = -approach_m)."""
+        """The driver's reference path (earth frame; the car starts at the origin)."""
         (_, _, _, _), (_, _, y3r, _), (_, _, y5r, y5l) = self.sections
         y_side = y3r + self.side_lane_target_m
         y_exit = 0.5 * (y5r + y5l)
-        xs = (-self.approach_m, self.turn_in_x_m, self.side_lane_reach_x_m, self.return_x_m,
-              self.return_reach_x_m, 61.0 + 100.0)
+        x0 = self.approach_m
+        xs = (0.0, x0 + self.turn_in_x_m, x0 + self.side_lane_reach_x_m, x0 + self.return_x_m,
+              x0 + self.return_reach_x_m, x0 + 61.0 + 100.0)
         ys = (0.0, 0.0, y_side, y_side, y_exit, y_exit)
         return LanePath(xs, ys)
 
@@ -374,12 +377,14 @@ class BrakeInTurnParams:
         """Input angle (rad) at time ``t`` (s)."""
         ramp = abs(self.amplitude_rad) / self.rate_radps
         if ramp == 0.0:
-            return self.amplitude_rad if t >= self.steer_start_s else 0.0
+            return self.amplitude_rad if t >= self.steer_start_s - _TIME_EPS_S else 0.0
         return self.amplitude_rad * _smooth_ramp((t - self.steer_start_s) / ramp)
 
     def braking(self, t: float) -> bool:
-        """True while the brake torque is applied."""
-        return self.brake_start_s <= t < self.brake_start_s + self.brake_duration_s
+        """True while the brake torque is applied (edges with a 1 ns tolerance, so tick
+        times that differ by rounding, k*Tc vs n*dt, switch at the same tick)."""
+        return (self.brake_start_s - _TIME_EPS_S <= t
+                < self.brake_start_s + self.brake_duration_s - _TIME_EPS_S)
 
     def phase(self, t: float) -> str:
         """``settle``, ``steer``, ``brake``, ``hold``."""
@@ -564,6 +569,7 @@ class Maneuver:
             self._path_driver = PreviewPathDriver(spec.path_driver, vehicle, p.path())
         elif spec.type == "random_steer":
             self._random = p.samples()
+            self._random_index = np.arange(self._random.size, dtype=float)
 
     # -- the interface -------------------------------------------------------------------
     @property
@@ -581,13 +587,6 @@ class Maneuver:
         """Planned duration in s (a run may end earlier, see :meth:`done`)."""
         return self.spec.duration_s
 
-    @property
-    def initial_pose(self) -> tuple[float, float, float]:
-        """Start pose (x_m, y_m, heading_rad) in the earth frame."""
-        if self.spec.type == "double_lane_change":
-            return (-self.spec.params.approach_m, 0.0, 0.0)
-        return (0.0, 0.0, 0.0)
-
     def steer_input(self, t: float) -> float:
         """Open-loop input angle (rad, in the unit of ``steer_input``) at time ``t``."""
         p = self.spec.params
@@ -598,8 +597,8 @@ class Maneuver:
                 return 0.0
             fade = 1.0 if p.fade_s == 0.0 else 0.5 * (1.0 - math.cos(
                 math.pi * _smooth_ramp(tau / p.fade_s)))
-            return fade * float(np.interp(tau * p.sample_rate_hz,
-                                          np.arange(self._random.size), self._random))
+            return fade * float(np.interp(tau * p.sample_rate_hz, self._random_index,
+                                          self._random))
         return float(p.steer(t))
 
     def target_speed_mps(self, t: float) -> float:
@@ -631,7 +630,7 @@ class Maneuver:
                 total = self.vehicle.chassis.mass_kg * self._wheel_radius() * p.deceleration_mps2
                 brake = split_brake_torque(total, self.spec.speed_hold.brake_front_fraction)
                 return DriverCommand(hand, front, 0.0, (0.0, 0.0, 0.0, 0.0), brake)
-            if t >= p.brake_start_s and self._hold_after_brake_mps is None:
+            if t >= p.brake_start_s - _TIME_EPS_S and self._hold_after_brake_mps is None:
                 self._hold_after_brake_mps = speed
                 self._speed_driver.reset()
         drive, brake = self._speed_driver.command(t, speed, self.target_speed_mps(t))
@@ -654,7 +653,7 @@ class Maneuver:
         if kind == "constant_radius":
             return f"speed_{self.target_speed_mps(t):.2f}_mps"
         if kind == "double_lane_change":
-            x = t * self.initial_speed_mps - p.approach_m
+            x = t * self.initial_speed_mps - p.approach_m  # nominal position in the course
             return "approach" if x < 0.0 else ("course" if x < 61.0 else "exit")
         return p.phase(t)
 

@@ -1,0 +1,273 @@
+"""Maneuver inputs against their analytic definitions, the drivers' laws, the ISO 3888-2 track,
+and the validation of maneuver files."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from fourws_sim.drivers import (CirclePath, PathDriverSpec, PreviewPathDriver, SpeedHoldDriver,
+                                SpeedHoldSpec)
+from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.maneuvers import (MANEUVER_TYPES, available_maneuvers, load_maneuver_spec,
+                                  make_maneuver, maneuver_spec_from_mapping)
+from fourws_sim.params import GRAVITY_MPS2, load_vehicle
+
+VEHICLE = "table_4_4"  # has a steering ratio (Table 4.4) for the hand-wheel conversion
+STILL = {"speed_mps": 20.0, "x_m": 0.0, "y_m": 0.0, "heading_rad": 0.0,
+         "lateral_accel_mps2": 0.0}
+
+
+def _vehicle():
+    return load_vehicle(VEHICLE)
+
+
+def _front(man, times):
+    return np.array([man.command(float(t), STILL).front_wheel_angle_rad for t in times])
+
+
+def test_every_type_has_a_shipped_file_that_loads_and_round_trips() -> None:
+    specs = [load_maneuver_spec(name) for name in available_maneuvers()]
+    assert {s.type for s in specs} == set(MANEUVER_TYPES)
+    for spec in specs:
+        again = load_maneuver_spec(spec.to_dict())
+        assert again.to_dict() == spec.to_dict()
+    assert load_maneuver_spec("step_steer_85kmh").initial_speed_mps == pytest.approx(85 / 3.6)
+
+
+def test_step_steer_amplitude_and_ramp() -> None:
+    """ISO 7401 step: 0 before, linear ramp, held amplitude; 10-90 % rise within 0.15 s."""
+    spec = load_maneuver_spec("step_steer_85kmh")
+    p = spec.params
+    man = make_maneuver(spec, _vehicle())
+    t = np.array([0.0, p.start_s - 1e-3, p.start_s + 0.5 * p.ramp_time_s,
+                  p.start_s + p.ramp_time_s, spec.duration_s - 0.01])
+    np.testing.assert_allclose(_front(man, t), [0.0, 0.0, 0.5 * p.amplitude_rad,
+                                                p.amplitude_rad, p.amplitude_rad], rtol=1e-12)
+    fine = np.arange(0.0, 2.0, 1e-4)
+    y = np.array([p.steer(x) for x in fine]) / p.amplitude_rad
+    rise = fine[np.argmax(y >= 0.9)] - fine[np.argmax(y >= 0.1)]
+    assert rise == pytest.approx(0.8 * p.ramp_time_s, abs=2e-4)
+    assert rise <= 0.15
+
+
+def test_hand_wheel_input_is_divided_by_the_steering_ratio() -> None:
+    vehicle = _vehicle()
+    data = load_maneuver_spec("step_steer_85kmh").to_dict()
+    data.update(steer_input="steering_wheel", amplitude_rad=0.5)
+    man = make_maneuver(data, vehicle)
+    cmd = man.command(3.0, STILL)
+    assert cmd.steering_wheel_angle_rad == pytest.approx(0.5, rel=1e-12)
+    assert cmd.front_wheel_angle_rad == pytest.approx(0.5 / vehicle.steering.ratio, rel=1e-12)
+    road = make_maneuver("step_steer_85kmh", vehicle).command(3.0, STILL)
+    assert road.steering_wheel_angle_rad == pytest.approx(
+        road.front_wheel_angle_rad * vehicle.steering.ratio, rel=1e-12)
+
+
+def test_ramp_steer_rate() -> None:
+    spec = load_maneuver_spec("ramp_steer")
+    p = spec.params
+    man = make_maneuver(spec, _vehicle())
+    t0 = p.start_s + 0.1
+    y = _front(man, [t0, t0 + 0.2])
+    assert (y[1] - y[0]) / 0.2 == pytest.approx(p.rate_radps, rel=1e-9)
+    assert _front(man, [p.start_s + p.ramp_time_s + 1.0])[0] == pytest.approx(p.amplitude_rad)
+
+
+def test_single_sine_is_one_period() -> None:
+    spec = load_maneuver_spec("sine")
+    p = spec.params
+    t = np.arange(0.0, spec.duration_s, 1e-4)
+    y = np.array([p.steer(x) for x in t])
+    period = 1.0 / p.frequency_hz
+    assert y.max() == pytest.approx(p.amplitude_rad, rel=1e-6)
+    assert t[np.argmax(y)] == pytest.approx(p.start_s + 0.25 * period, abs=2e-4)
+    assert np.trapezoid(y, t) == pytest.approx(0.0, abs=1e-6 * p.amplitude_rad)
+    assert np.all(y[t > p.start_s + period + 1e-3] == 0.0)
+
+
+@pytest.mark.parametrize("spacing", ["logarithmic", "linear"])
+def test_chirp_instantaneous_frequency(spacing: str) -> None:
+    """Half-periods between zero crossings equal 1 / (2 f(t)) of the analytic sweep law."""
+    data = load_maneuver_spec("swept_sine").to_dict()
+    data["spacing"] = spacing
+    p = load_maneuver_spec(data).params
+    t = np.arange(p.start_s, p.start_s + p.sweep_time_s, 1e-4)
+    y = np.array([p.steer(x) for x in t])
+    idx = np.nonzero(np.diff(np.signbit(y)))[0][1:]
+    # linear interpolation of each crossing
+    tc = t[idx] - y[idx] * (t[idx + 1] - t[idx]) / (y[idx + 1] - y[idx])
+    f_measured = 0.5 / np.diff(tc)
+    tau = 0.5 * (tc[1:] + tc[:-1]) - p.start_s
+    if spacing == "linear":
+        f_law = p.f_start_hz + (p.f_end_hz - p.f_start_hz) * tau / p.sweep_time_s
+    else:
+        f_law = p.f_start_hz * (p.f_end_hz / p.f_start_hz) ** (tau / p.sweep_time_s)
+    np.testing.assert_allclose(f_measured, f_law, rtol=5e-3)
+    # zero crossings over the sweep: 2 per period, 2 * integral of f(tau) over [0, T]
+    if spacing == "linear":
+        periods = 0.5 * (p.f_start_hz + p.f_end_hz) * p.sweep_time_s
+    else:
+        periods = ((p.f_end_hz - p.f_start_hz) * p.sweep_time_s
+                   / math.log(p.f_end_hz / p.f_start_hz))
+    assert abs(len(idx) + 2 - 2.0 * periods) <= 1.0
+    assert f_measured[-1] == pytest.approx(p.f_end_hz, rel=0.02)
+    assert np.abs(y).max() == pytest.approx(p.amplitude_rad, rel=1e-3)
+
+
+def test_random_steer_power_is_inside_its_band() -> None:
+    spec = load_maneuver_spec("random_steer")
+    p = spec.params
+    man = make_maneuver(spec, _vehicle())
+    fs = 100.0  # the control rate the maneuver is sampled at
+    t = np.arange(p.start_s + p.fade_s, p.start_s + p.length_s, 1.0 / fs)
+    y = _front(man, t)
+    freqs, psd = signal.welch(y, fs=fs, nperseg=2048)
+    df = freqs[1] - freqs[0]
+    # the Hann window's main lobe spreads a line over +-2 bins: the band edges get that margin
+    inside = (freqs >= p.f_low_hz - 2 * df) & (freqs <= p.f_high_hz + 2 * df)
+    frac_in = psd[inside].sum() / psd.sum()
+    assert frac_in > 0.999
+    # the band power is the variance: rms as specified (brick-wall filtered, exact scaling)
+    assert math.sqrt(psd[inside].sum() * df) == pytest.approx(p.rms_rad, rel=0.1)
+    assert np.sqrt(np.mean(y * y)) == pytest.approx(p.rms_rad, rel=0.05)
+    # seeded: same seed, same input; another seed, another input
+    again = _front(make_maneuver(spec, _vehicle()), t[:200])
+    np.testing.assert_array_equal(again, y[:200])
+    other = dict(spec.to_dict(), seed=p.seed + 1)
+    assert not np.allclose(_front(make_maneuver(other, _vehicle()), t[:200]), y[:200])
+
+
+@pytest.mark.parametrize("shape,area_factor", [("triangle", 0.5), ("half_sine", 2 / math.pi)])
+def test_pulse_area(shape: str, area_factor: float) -> None:
+    data = dict(load_maneuver_spec("pulse").to_dict(), shape=shape)
+    p = load_maneuver_spec(data).params
+    t = np.linspace(0.0, 2.0, 200001)
+    y = np.array([p.steer(x) for x in t])
+    assert np.trapezoid(y, t) == pytest.approx(area_factor * p.amplitude_rad * p.width_s,
+                                               rel=1e-6)
+    assert y.max() == pytest.approx(p.amplitude_rad, rel=1e-4)
+
+
+def test_speed_hold_torque_law() -> None:
+    """First call (empty integrator): T = m R (kp e + f_r g), on the driven axle only;
+    a speed above target brakes with the front/rear split."""
+    vehicle = load_vehicle("table_8_1")
+    spec = SpeedHoldSpec(kp_per_s=2.0, ki_per_s2=1.0, driven_axle="rear")
+    driver = SpeedHoldDriver(spec, vehicle)
+    m, r = vehicle.chassis.mass_kg, vehicle.body.wheel_radius_m
+    fr = vehicle.tire.rolling_resistance if vehicle.tire is not None else 0.0
+    drive, brake = driver.command(0.0, 20.0, 20.5)
+    total = m * r * (2.0 * 0.5 + fr * GRAVITY_MPS2)
+    assert drive[0] == drive[1] == 0.0
+    assert drive[2] + drive[3] == pytest.approx(total, rel=1e-12)
+    assert sum(brake) == 0.0
+    # integrator after 0.1 s of 0.5 m/s error: ki * 0.05 m added
+    drive, _ = driver.command(0.1, 20.0, 20.5)
+    assert sum(drive) == pytest.approx(m * r * (1.0 + 0.05 + fr * GRAVITY_MPS2), rel=1e-12)
+    fresh = SpeedHoldDriver(spec, vehicle)
+    drive, brake = fresh.command(0.0, 21.0, 20.0)
+    assert sum(drive) == 0.0
+    assert sum(brake) == pytest.approx(m * r * (2.0 - fr * GRAVITY_MPS2), rel=1e-12)
+    assert (brake[0] + brake[1]) / sum(brake) == pytest.approx(spec.brake_front_fraction)
+
+
+def test_preview_driver_on_the_circle_steers_its_curvature() -> None:
+    """On the circle, tangent to it, the pure-pursuit arc is the circle itself (chord
+    geometry): delta = (L + K U^2) / R for any preview distance."""
+    vehicle = load_vehicle("table_5_1")
+    radius, speed = 40.0, 12.0
+    for direction in (1, -1):
+        path = CirclePath(radius, direction)
+        driver = PreviewPathDriver(PathDriverSpec(), vehicle, path)
+        angle = 0.7  # any point of the circle, heading tangent
+        cx, cy = path.centre
+        x = cx + radius * math.cos(direction * (angle - math.pi / 2))
+        y = cy + radius * math.sin(direction * (angle - math.pi / 2))
+        delta = driver.steer(0.0, {"x_m": x, "y_m": y, "heading_rad": direction * angle,
+                                   "speed_mps": speed})
+        expected = (vehicle.chassis.wheelbase_m
+                    + vehicle.understeer_gradient_rad_per_mps2 * speed ** 2) / radius
+        assert delta == pytest.approx(direction * expected, rel=1e-9)
+
+
+def test_iso_3888_2_track() -> None:
+    """Section lengths 12/11/12 m, gaps 13.5/12.5 m (61 m in all), widths 1.1W+0.25, W+1,
+    max(1.3W+0.25, 3), side lane 1 m left of section 1, exit lane's right edge in line with
+    the entry lane's (ISO 3888-2:2011, Table 1)."""
+    for width in (1.7, 2.3):
+        data = dict(load_maneuver_spec("double_lane_change").to_dict(), vehicle_width_m=width)
+        p = load_maneuver_spec(data).params
+        (a0, a1, ar, al), (b0, b1, br, bl), (c0, c1, cr, cl) = p.sections
+        assert (a1 - a0, b0 - a1, b1 - b0, c0 - b1, c1 - c0) == pytest.approx(
+            (12.0, 13.5, 11.0, 12.5, 12.0))
+        assert c1 - a0 == pytest.approx(61.0)
+        assert a0 == pytest.approx(p.approach_m)
+        assert (al - ar, bl - br, cl - cr) == pytest.approx(
+            (1.1 * width + 0.25, width + 1.0, max(1.3 * width + 0.25, 3.0)))
+        assert br - al == pytest.approx(1.0)
+        assert cr == pytest.approx(ar)
+        path = p.path()
+        assert path.y_ref(a0) == 0.0
+        assert br < path.y_ref(0.5 * (b0 + b1)) < bl
+        assert cr < path.y_ref(0.5 * (c0 + c1)) < cl
+
+
+def test_brake_in_turn_schedule() -> None:
+    vehicle = load_vehicle("table_8_1")
+    spec = load_maneuver_spec("brake_in_turn")
+    p = spec.params
+    man = make_maneuver(spec, vehicle)
+    outputs = dict(STILL, speed_mps=spec.initial_speed_mps)
+    before = man.command(p.brake_start_s - 0.01, outputs)
+    during = man.command(p.brake_start_s + 0.5, outputs)
+    assert sum(before.brake_torque_nm) == 0.0
+    assert sum(during.drive_torque_nm) == 0.0
+    expected = vehicle.chassis.mass_kg * vehicle.body.wheel_radius_m * 0.3 * GRAVITY_MPS2
+    assert sum(during.brake_torque_nm) == pytest.approx(expected, rel=1e-6)
+    assert man.phase(p.brake_start_s + 0.5) == "brake"
+    assert man.phase(spec.duration_s) == "done"
+
+
+def test_unknown_type_lists_the_valid_ones() -> None:
+    with pytest.raises(UnknownNameError) as err:
+        maneuver_spec_from_mapping({"type": "moose", "initial_speed_mps": 1.0,
+                                    "duration_s": 1.0})
+    assert "moose" in str(err.value)
+    for name in MANEUVER_TYPES:
+        assert name in str(err.value)
+    with pytest.raises(UnknownNameError):
+        load_maneuver_spec("no_such_maneuver")
+
+
+@pytest.mark.parametrize("change,field", [
+    ({"amplitude_rad": "big"}, "amplitude_rad"),
+    ({"ramp_time_s": -0.1}, "ramp_time_s"),
+    ({"duration_s": 0.0}, "duration_s"),
+    ({"steer_input": "pedal"}, "steer_input"),
+    ({"wobble": 1.0}, "wobble"),
+    ({"speed_hold": {"kp_per_s": -1.0}}, "speed_hold.kp_per_s"),
+    ({"speed_hold": {"driven_axle": "middle"}}, "speed_hold.driven_axle"),
+    ({"path_driver": {}}, "path_driver"),
+])
+def test_malformed_file_names_field_and_file(tmp_path: Path, change: dict, field: str) -> None:
+    data = load_maneuver_spec("step_steer_85kmh").to_dict()
+    data.update(change)
+    path = tmp_path / "bad.yaml"
+    import yaml
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ParameterError) as err:
+        load_maneuver_spec(path)
+    assert err.value.field == field
+    assert str(path) in str(err.value)
+
+
+def test_missing_amplitude_is_reported(tmp_path: Path) -> None:
+    data = load_maneuver_spec("step_steer_85kmh").to_dict()
+    del data["amplitude_rad"]
+    with pytest.raises(ParameterError, match="amplitude_rad: missing"):
+        maneuver_spec_from_mapping(data, "x.yaml")
