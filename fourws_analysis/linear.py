@@ -1,0 +1,658 @@
+r"""Linear analysis of the linear vehicle models closed with a rear-steer law.
+
+Closing the loop
+----------------
+A linear model :math:`\dot x = A x + B u` (``fourws_sim.models``, ``STATE``/``INPUT`` order)
+and a law written for it, :math:`\delta_r = K_x x + K_u u`
+(:meth:`fourws_control.base.Law.linear_gains`), give
+
+.. math::
+
+    \dot x = (A + b_r K_x)\,x + (B_d + b_r K_{u,d})\,u_d
+
+with :math:`b_r` the rear-steer column of B and :math:`u_d` the driver inputs (front angle,
+or steering torque for free control). Everything else here works on that closed loop:
+eigenvalues with natural frequencies (Hz) and damping ratios, the Routh-Hurwitz array of its
+characteristic polynomial, controllability through the rear steer, the critical speed,
+transfer functions, Bode data (frequencies in Hz), steady-state gains and the Lyapunov
+check of chapter 5. python-control builds the LTI objects; scipy solves the Lyapunov
+equation. Results are dataclasses with ``to_dict()`` for JSON.
+
+Outputs of the transfer functions (SI, per unit of the driver input): ``yaw_rate`` (rad/s),
+``lateral_acceleration`` :math:`a_y = \dot V + U r` (m/s^2), ``sideslip``
+:math:`\beta = V/U` (rad, small angle), ``lateral_velocity`` (m/s), ``roll`` (rad, 3-DOF)
+and ``front_steer`` (rad, free control).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import control
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from fourws_control.base import Law, check_speed
+from fourws_control.registry import make_law
+from fourws_control.signals import LINEAR_MODELS, signal_map
+from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
+from fourws_sim.models import get_model
+from fourws_sim.params import Vehicle
+
+#: Default speed range searched for a critical speed, m/s.
+CRITICAL_SPEED_RANGE_MPS = (1.0, 100.0)
+#: Number of speeds sampled before the sign change is refined with brentq.
+_CRITICAL_SPEED_SAMPLES = 200
+#: Absolute tolerance of the critical-speed root, m/s.
+_CRITICAL_SPEED_XTOL_MPS = 1e-6
+#: Real parts within this of zero (1/s) count as on the imaginary axis (marginal).
+MARGINAL_TOL_PER_S = 1e-9
+#: Default Bode frequency grid, Hz.
+DEFAULT_BODE_HZ = (0.01, 10.0)
+_DEFAULT_BODE_POINTS = 200
+
+
+def _law(law: Law | str | None, vehicle: Vehicle) -> Law:
+    if law is None:
+        return make_law("fws", vehicle)
+    if isinstance(law, str):
+        return make_law(law, vehicle)
+    return law
+
+
+def _check_model_name(model_name: str) -> None:
+    if model_name not in LINEAR_MODELS:
+        from fourws_sim.errors import UnknownNameError
+        raise UnknownNameError("linear model", str(model_name), list(LINEAR_MODELS))
+
+
+@dataclass(frozen=True)
+class ClosedLoop:
+    """A linear model closed with a law at one speed.
+
+    Attributes
+    ----------
+    model, law : str
+        Model and law names.
+    speed_mps : float
+        Forward speed U, m/s.
+    A : numpy.ndarray
+        Closed-loop state matrix (n x n).
+    B : numpy.ndarray
+        Closed-loop input matrix for the driver inputs (n x m).
+    A_open, b_rear : numpy.ndarray
+        Open-loop state matrix and rear-steer column (for controllability).
+    state_names, input_names : tuple of str
+        Model ``STATE`` names and the driver-input names.
+    """
+
+    model: str
+    law: str
+    speed_mps: float
+    A: np.ndarray
+    B: np.ndarray
+    A_open: np.ndarray
+    b_rear: np.ndarray
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+
+    def state_index(self, name: str) -> int:
+        """Index of state ``name`` (e.g. ``"V"``)."""
+        return self.state_names.index(name)
+
+
+def closed_loop(model_name: str, vehicle: Vehicle, law: Law | str | None,
+                speed_mps: float) -> ClosedLoop:
+    """Close linear model ``model_name`` of ``vehicle`` with ``law`` at ``speed_mps``.
+
+    Parameters
+    ----------
+    model_name : str
+        ``2dof``, ``2dof-free``, ``2dof-lagged`` or ``3dof``.
+    vehicle : Vehicle
+        The (true) vehicle of the model.
+    law : Law or str or None
+        A law object (its belief vehicle may differ), a law name (built on ``vehicle``), or
+        None for ``fws``.
+    speed_mps : float
+        Forward speed in m/s (> 0).
+
+    Raises
+    ------
+    ParameterError
+        Speed not > 0, or the vehicle lacks a subsystem the model needs.
+    IncompatibleError
+        The law cannot be written for the model.
+    """
+    _check_model_name(model_name)
+    speed = check_speed(speed_mps)
+    law_obj = _law(law, vehicle)
+    A, B = get_model(model_name).matrices(vehicle, speed)
+    smap = signal_map(model_name)
+    g = law_obj.linear_gains(model_name, vehicle, speed)
+    b_r = B[:, smap.rear_input]
+    drv = list(smap.driver_inputs)
+    A_cl = A + np.outer(b_r, g.K_x)
+    B_cl = B[:, drv] + np.outer(b_r, g.K_u[drv])
+    if not (np.all(np.isfinite(A_cl)) and np.all(np.isfinite(B_cl))):
+        raise NonFiniteError(f"closed loop {model_name}/{law_obj.name} at {speed} m/s "
+                             "is not finite")
+    return ClosedLoop(model_name, law_obj.name, speed, A_cl, B_cl, A, b_r,
+                      smap.state_names, tuple(smap.input_names[i] for i in drv))
+
+
+# ----------------------------------------------------------------------------- eigenvalues
+
+@dataclass(frozen=True)
+class Mode:
+    """One eigenvalue with its natural frequency and damping ratio.
+
+    ``natural_frequency_hz = |lambda| / (2 pi)``, ``damping_ratio = -Re(lambda)/|lambda|``
+    (1 for a stable real root, negative when unstable).
+    """
+
+    eigenvalue: complex
+    natural_frequency_hz: float
+    damping_ratio: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping (eigenvalue as ``[re, im]`` in 1/s)."""
+        return {"eigenvalue": [self.eigenvalue.real, self.eigenvalue.imag],
+                "natural_frequency_hz": self.natural_frequency_hz,
+                "damping_ratio": self.damping_ratio}
+
+
+def modes(A: np.ndarray) -> list[Mode]:
+    """Eigenvalues of ``A`` (1/s) sorted by real part, with frequency (Hz) and damping."""
+    A = np.asarray(A, dtype=float)
+    if not np.all(np.isfinite(A)):
+        raise NonFiniteError("state matrix is not finite")
+    lam = np.linalg.eigvals(A)
+    lam = lam[np.lexsort((lam.imag, lam.real))]
+    out = []
+    for z in lam:
+        z = complex(z)
+        wn = abs(z)
+        zeta = -z.real / wn if wn > 0.0 else 1.0
+        out.append(Mode(z, wn / (2.0 * math.pi), zeta))
+    return out
+
+
+def is_stable(A: np.ndarray, tol: float = MARGINAL_TOL_PER_S) -> bool:
+    """True when every eigenvalue of ``A`` has real part < ``-tol`` (asymptotic stability)."""
+    return bool(np.max(np.linalg.eigvals(np.asarray(A, dtype=float)).real) < -tol)
+
+
+# ------------------------------------------------------------------------------ Routh-Hurwitz
+
+@dataclass(frozen=True)
+class RouthHurwitz:
+    """Routh-Hurwitz test of a characteristic polynomial (Appendix A).
+
+    Attributes
+    ----------
+    coefficients : list of float
+        ``[a_n, ..., a_0]`` of ``a_n s^n + ... + a_0`` (monic, from the closed-loop A).
+    array : list of list of float
+        The Routh array rows (zero-padded).
+    first_column : list of float
+        First column of the array; all > 0 is necessary and sufficient for stability.
+    conditions : list of dict
+        Named conditions ``{name, value, satisfied}``: every coefficient ``a_k > 0``, and the
+        Hurwitz inequalities (cubic: ``a2 a1 - a3 a0 > 0``; quartic: ``a3 a2 - a4 a1 > 0`` and
+        ``a1 (a3 a2 - a4 a1) - a0 a3^2 > 0``, the paper's eqs. 4.59, 6.67, 6.68); for other
+        orders the first-column entries.
+    sign_changes : int
+        Sign changes of the first column = number of right-half-plane roots.
+    stable : bool
+        All conditions satisfied.
+    """
+
+    coefficients: list[float]
+    array: list[list[float]]
+    first_column: list[float]
+    conditions: list[dict[str, Any]]
+    sign_changes: int
+    stable: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"coefficients": self.coefficients, "first_column": self.first_column,
+                "conditions": self.conditions, "sign_changes": self.sign_changes,
+                "stable": self.stable, "array": self.array}
+
+
+def routh_array(coefficients: Sequence[float], eps: float = 1e-12) -> np.ndarray:
+    """Routh array of ``coefficients`` (highest power first).
+
+    A zero first-column entry is replaced by ``eps`` times the largest coefficient magnitude
+    (the usual epsilon method), which keeps the sign-change count right for isolated zeros.
+    """
+    c = np.asarray(coefficients, dtype=float)
+    n = len(c) - 1
+    width = n // 2 + 1
+    R = np.zeros((n + 1, width))
+    R[0, : len(c[0::2])] = c[0::2]
+    R[1, : len(c[1::2])] = c[1::2]
+    small = eps * max(1.0, float(np.abs(c).max()))
+    for i in range(2, n + 1):
+        if R[i - 1, 0] == 0.0:
+            R[i - 1, 0] = small
+        for j in range(width - 1):
+            R[i, j] = (R[i - 1, 0] * R[i - 2, j + 1] - R[i - 2, 0] * R[i - 1, j + 1]) / R[i - 1, 0]
+    return R
+
+
+def routh_hurwitz(A: np.ndarray) -> RouthHurwitz:
+    """Routh-Hurwitz analysis of the characteristic polynomial ``det(sI - A)``."""
+    A = np.asarray(A, dtype=float)
+    coeffs = np.real(np.poly(A))
+    n = len(coeffs) - 1
+    R = routh_array(coeffs)
+    first = R[:, 0]
+    # scale-free tolerance: a coefficient that is zero up to rounding is not "positive"
+    scale = np.abs(coeffs).max()
+    conds: list[dict[str, Any]] = []
+    for k in range(n, -1, -1):
+        val = float(coeffs[n - k])
+        conds.append({"name": f"a{k} > 0", "value": val, "satisfied": bool(val > 1e-12 * scale)})
+    a = {k: float(coeffs[n - k]) for k in range(n + 1)}
+    if n == 3:
+        val = a[2] * a[1] - a[3] * a[0]
+        conds.append({"name": "a2 a1 - a3 a0 > 0", "value": val,
+                      "satisfied": bool(val > 1e-12 * scale ** 2)})
+    elif n == 4:
+        h2 = a[3] * a[2] - a[4] * a[1]
+        h3 = a[1] * h2 - a[0] * a[3] ** 2
+        conds.append({"name": "a3 a2 - a4 a1 > 0", "value": h2,
+                      "satisfied": bool(h2 > 1e-12 * scale ** 2)})
+        conds.append({"name": "a1 (a3 a2 - a4 a1) - a0 a3^2 > 0", "value": h3,
+                      "satisfied": bool(h3 > 1e-12 * scale ** 3)})
+    elif n > 4:
+        for i, v in enumerate(first):
+            conds.append({"name": f"routh[{i}][0] > 0", "value": float(v),
+                          "satisfied": float(v) > 0.0})
+    signs = np.sign(first[np.abs(first) > 0])
+    changes = int(np.count_nonzero(np.diff(signs)))
+    stable = all(c["satisfied"] for c in conds)
+    return RouthHurwitz([float(x) for x in coeffs], [[float(x) for x in row] for row in R],
+                        [float(x) for x in first], conds, changes, stable)
+
+
+# --------------------------------------------------------------------------- controllability
+
+@dataclass(frozen=True)
+class Controllability:
+    """Controllability of the open-loop model through the rear steer (section 3.3.1).
+
+    Attributes
+    ----------
+    rank : int
+        Rank of ``[b, A b, ..., A^{n-1} b]``.
+    n_states : int
+        n.
+    determinant : float
+        Determinant of that (square) matrix; its zero gives the uncontrollable speed (3.14).
+    controllable : bool
+        Full rank.
+    """
+
+    rank: int
+    n_states: int
+    determinant: float
+    controllable: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"rank": self.rank, "n_states": self.n_states, "determinant": self.determinant,
+                "controllable": self.controllable}
+
+
+def controllability(A: np.ndarray, b: np.ndarray) -> Controllability:
+    """Controllability of ``(A, b)`` from python-control's ``ctrb``."""
+    C = control.ctrb(np.asarray(A, dtype=float), np.asarray(b, dtype=float).reshape(-1, 1))
+    n = C.shape[0]
+    rank = int(np.linalg.matrix_rank(C))
+    det = float(np.linalg.det(C)) if C.shape[1] == n else float("nan")
+    return Controllability(rank, n, det, rank == n)
+
+
+# ----------------------------------------------------------------------------- critical speed
+
+@dataclass(frozen=True)
+class CriticalSpeed:
+    """Lowest speed of a range at which a closed loop loses stability.
+
+    Attributes
+    ----------
+    critical_speed_mps : float or None
+        Speed (m/s) where the largest real part of the eigenvalues crosses zero going up in
+        speed; None when stable over the whole range.
+    searched_range_mps : tuple of float
+        The range searched.
+    unstable_at_start : bool
+        Already unstable at the bottom of the range (then ``critical_speed_mps`` is the
+        range's lower end).
+    """
+
+    critical_speed_mps: float | None
+    searched_range_mps: tuple[float, float]
+    unstable_at_start: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"critical_speed_mps": self.critical_speed_mps,
+                "searched_range_mps": list(self.searched_range_mps),
+                "unstable_at_start": self.unstable_at_start}
+
+
+def max_real_part(model_name: str, vehicle: Vehicle, law: Law | str | None,
+                  speed_mps: float) -> float:
+    """Largest real part (1/s) of the closed-loop eigenvalues at ``speed_mps``."""
+    cl = closed_loop(model_name, vehicle, law, speed_mps)
+    return float(np.max(np.linalg.eigvals(cl.A).real))
+
+
+def critical_speed(model_name: str, vehicle: Vehicle, law: Law | str | None = None,
+                   speed_range_mps: tuple[float, float] = CRITICAL_SPEED_RANGE_MPS,
+                   samples: int = _CRITICAL_SPEED_SAMPLES,
+                   criterion: str = "eigenvalues") -> CriticalSpeed:
+    """Search ``speed_range_mps`` for the speed where the closed loop becomes unstable.
+
+    Parameters
+    ----------
+    criterion : {"eigenvalues", "lyapunov"}
+        Stability measure: largest real eigenvalue part, or the chapter-5 Lyapunov test
+        (smallest leading principal minor of P, see :func:`lyapunov_check`).
+    """
+    lo, hi = (check_speed(s, "speed_range_mps") for s in speed_range_mps)
+    if hi <= lo:
+        raise ParameterError("speed_range_mps", f"must be increasing, got {speed_range_mps}")
+    law_obj = _law(law, vehicle)
+
+    if criterion == "eigenvalues":
+        def margin(u: float) -> float:
+            return -max_real_part(model_name, vehicle, law_obj, u)
+    elif criterion == "lyapunov":
+        def margin(u: float) -> float:
+            cl = closed_loop(model_name, vehicle, law_obj, u)
+            return lyapunov_check(cl.A).margin
+    else:
+        raise ParameterError("criterion", f"must be 'eigenvalues' or 'lyapunov', got "
+                             f"{criterion!r}")
+    speeds = np.geomspace(lo, hi, int(samples))
+    prev_u, prev_m = speeds[0], margin(float(speeds[0]))
+    if prev_m <= 0.0:
+        return CriticalSpeed(float(lo), (lo, hi), True)
+    for u in speeds[1:]:
+        m = margin(float(u))
+        if m <= 0.0:
+            root = scipy.optimize.brentq(margin, float(prev_u), float(u),
+                                         xtol=_CRITICAL_SPEED_XTOL_MPS)
+            return CriticalSpeed(float(root), (lo, hi), False)
+        prev_u, prev_m = u, m
+    return CriticalSpeed(None, (lo, hi), False)
+
+
+# ---------------------------------------------------------------- outputs, TF, Bode, gains
+
+def output_matrices(cl: ClosedLoop) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Names, C and D of the standard outputs of ``cl`` (see module docstring)."""
+    S = cl.state_names
+    n, m = cl.A.shape[0], cl.B.shape[1]
+    iv, ir = S.index("V"), S.index("R")
+    names: list[str] = []
+    rows_c: list[np.ndarray] = []
+    rows_d: list[np.ndarray] = []
+
+    def add(name: str, c: np.ndarray, d: np.ndarray | None = None) -> None:
+        names.append(name)
+        rows_c.append(c)
+        rows_d.append(np.zeros(m) if d is None else d)
+
+    e = np.eye(n)
+    add("yaw_rate", e[ir])
+    add("lateral_acceleration", cl.A[iv] + cl.speed_mps * e[ir], cl.B[iv].copy())
+    add("sideslip", e[iv] / cl.speed_mps)
+    add("lateral_velocity", e[iv])
+    for state, name in (("PHI", "roll"), ("DELTA_F", "front_steer")):
+        if state in S:
+            add(name, e[S.index(state)])
+    return names, np.array(rows_c), np.array(rows_d)
+
+
+#: Units of each output per unit of each driver input.
+OUTPUT_UNITS = {"yaw_rate": "rad/s", "lateral_acceleration": "m/s^2", "sideslip": "rad",
+                "lateral_velocity": "m/s", "roll": "rad", "front_steer": "rad"}
+INPUT_UNITS = {"DELTA_F": "rad", "T_F": "N m"}
+
+
+def state_space(cl: ClosedLoop) -> tuple[control.StateSpace, list[str]]:
+    """python-control ``StateSpace`` of ``cl`` with the standard outputs, and their names."""
+    names, C, D = output_matrices(cl)
+    sys = control.ss(cl.A, cl.B, C, D, inputs=list(cl.input_names), outputs=names,
+                     states=list(cl.state_names))
+    return sys, names
+
+
+@dataclass(frozen=True)
+class TransferFunction:
+    """One SISO transfer function ``num(s)/den(s)`` (coefficients highest power first)."""
+
+    output: str
+    input: str
+    units: str
+    num: list[float]
+    den: list[float]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"output": self.output, "input": self.input, "units": self.units,
+                "num": self.num, "den": self.den}
+
+
+def transfer_functions(cl: ClosedLoop) -> list[TransferFunction]:
+    """Every output/driver-input transfer function of ``cl`` (``control.ss2tf``)."""
+    _, names = state_space(cl)
+    _, C, D = output_matrices(cl)
+    out = []
+    for j, inp in enumerate(cl.input_names):
+        for i, name in enumerate(names):
+            siso = control.ss(cl.A, cl.B[:, [j]], C[[i]], D[[i]][:, [j]])
+            tf = control.ss2tf(siso)
+            num = np.atleast_1d(np.squeeze(tf.num[0][0])).astype(float)
+            den = np.atleast_1d(np.squeeze(tf.den[0][0])).astype(float)
+            # drop numerically-zero leading numerator terms (relative to the largest)
+            while len(num) > 1 and abs(num[0]) <= 1e-10 * np.abs(num).max():
+                num = num[1:]
+            out.append(TransferFunction(name, inp, f"{OUTPUT_UNITS[name]}/{INPUT_UNITS[inp]}",
+                                        [float(x) for x in num], [float(x) for x in den]))
+    return out
+
+
+@dataclass(frozen=True)
+class BodeData:
+    """Frequency response of every output per driver input.
+
+    Attributes
+    ----------
+    frequencies_hz : numpy.ndarray
+        Frequencies in Hz.
+    magnitude : dict
+        ``"output/input" -> |G(j 2 pi f)|`` in the transfer function's units.
+    phase_deg : dict
+        ``"output/input" -> unwrapped phase in degrees``.
+    units : dict
+        ``"output/input" -> units``.
+    """
+
+    frequencies_hz: np.ndarray
+    magnitude: dict[str, np.ndarray]
+    phase_deg: dict[str, np.ndarray]
+    units: dict[str, str]
+
+    def magnitude_db(self, key: str) -> np.ndarray:
+        """20 log10 of the magnitude of ``key``."""
+        return 20.0 * np.log10(self.magnitude[key])
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"frequencies_hz": self.frequencies_hz.tolist(),
+                "magnitude": {k: v.tolist() for k, v in self.magnitude.items()},
+                "phase_deg": {k: v.tolist() for k, v in self.phase_deg.items()},
+                "units": self.units}
+
+
+def bode(cl: ClosedLoop, frequencies_hz: Sequence[float] | None = None) -> BodeData:
+    """Bode data of ``cl`` at ``frequencies_hz`` (default log-spaced 0.01-10 Hz)."""
+    if frequencies_hz is None:
+        f = np.geomspace(*DEFAULT_BODE_HZ, _DEFAULT_BODE_POINTS)
+    else:
+        f = np.asarray(frequencies_hz, dtype=float)
+        if f.ndim != 1 or f.size == 0 or np.any(~np.isfinite(f)) or np.any(f <= 0.0):
+            raise ParameterError("frequencies_hz", "must be a non-empty list of finite values > 0")
+    sys, names = state_space(cl)
+    resp = control.frequency_response(sys, 2.0 * np.pi * f)
+    mag = np.asarray(resp.magnitude).reshape(len(names), len(cl.input_names), len(f))
+    ph = np.asarray(resp.phase).reshape(len(names), len(cl.input_names), len(f))
+    magnitude, phase, units = {}, {}, {}
+    for j, inp in enumerate(cl.input_names):
+        for i, name in enumerate(names):
+            key = f"{name}/{inp}"
+            magnitude[key] = mag[i, j]
+            phase[key] = np.degrees(np.unwrap(ph[i, j]))
+            units[key] = f"{OUTPUT_UNITS[name]}/{INPUT_UNITS[inp]}"
+    return BodeData(f, magnitude, phase, units)
+
+
+def steady_state_gains(cl: ClosedLoop) -> dict[str, float]:
+    """Steady-state gains ``-C A^-1 B + D`` as ``{"output/input": gain}`` (units as the TFs).
+
+    Raises
+    ------
+    IncompatibleError
+        The closed loop has an eigenvalue at zero (no steady state).
+    """
+    if np.linalg.matrix_rank(cl.A) < cl.A.shape[0]:
+        raise IncompatibleError(f"{cl.model}/{cl.law} at {cl.speed_mps} m/s has a zero "
+                                "eigenvalue; no steady state")
+    names, C, D = output_matrices(cl)
+    G = -C @ np.linalg.solve(cl.A, cl.B) + D
+    return {f"{name}/{inp}": float(G[i, j]) for j, inp in enumerate(cl.input_names)
+            for i, name in enumerate(names)}
+
+
+# ------------------------------------------------------------------------------- Lyapunov
+
+@dataclass(frozen=True)
+class LyapunovCheck:
+    """Chapter-5 Lyapunov test: solve ``A^T P + P A = -Q`` and check P > 0 (Sylvester).
+
+    Attributes
+    ----------
+    P : numpy.ndarray
+        The solution (symmetric).
+    leading_minors : list of float
+        Leading principal minors of P (Sylvester's criterion: all > 0 iff P > 0).
+    stable : bool
+        P positive definite (and finite): asymptotically stable.
+    margin : float
+        Smallest leading minor normalized by the size of P (<= 0 or -1 for a non-finite
+        P when not stable); used to locate the critical speed.
+    """
+
+    P: np.ndarray
+    leading_minors: list[float]
+    stable: bool
+    margin: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {"P": self.P.tolist(), "leading_minors": self.leading_minors,
+                "stable": self.stable}
+
+
+def lyapunov_check(A: np.ndarray, Q: np.ndarray | None = None) -> LyapunovCheck:
+    """Lyapunov stability test of ``x' = A x`` (eqs. 5.75-5.90) with ``Q`` (default I).
+
+    Raises
+    ------
+    ParameterError
+        Q not symmetric positive definite (the theorem needs Q > 0).
+    """
+    A = np.asarray(A, dtype=float)
+    n = A.shape[0]
+    Q = np.eye(n) if Q is None else np.asarray(Q, dtype=float)
+    if Q.shape != (n, n) or not np.allclose(Q, Q.T) or np.linalg.eigvalsh(Q).min() <= 0.0:
+        raise ParameterError("Q", "must be a symmetric positive definite n x n matrix")
+    P = scipy.linalg.solve_continuous_lyapunov(A.T, -Q)
+    if not np.all(np.isfinite(P)):
+        return LyapunovCheck(P, [], False, -1.0)
+    P = 0.5 * (P + P.T)
+    minors = [float(np.linalg.det(P[:k, :k])) for k in range(1, n + 1)]
+    # scale each minor by the matching power of the P size so the margin is dimensionless
+    size = float(np.abs(P).max())
+    scaled = [m / size ** (k + 1) for k, m in enumerate(minors)]
+    margin = min(scaled)
+    return LyapunovCheck(P, minors, bool(margin > 0.0), float(margin))
+
+
+# --------------------------------------------------------------------------------- summary
+
+@dataclass(frozen=True)
+class LinearReport:
+    """Everything ``fourws linear`` prints for one model/law/speed."""
+
+    vehicle: str
+    model: str
+    law: str
+    speed_mps: float
+    modes: list[Mode]
+    stable: bool
+    routh_hurwitz: RouthHurwitz
+    controllability: Controllability
+    steady_state_gains: dict[str, float] | None
+    critical_speed: CriticalSpeed | None = None
+    law_gains: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping with the stable keys of ``fourws linear --json``."""
+        out: dict[str, Any] = {
+            "vehicle": self.vehicle, "model": self.model, "law": self.law,
+            "speed_mps": self.speed_mps, "speed_kmh": self.speed_mps * 3.6,
+            "eigenvalues": [[m.eigenvalue.real, m.eigenvalue.imag] for m in self.modes],
+            "natural_frequencies_hz": [m.natural_frequency_hz for m in self.modes],
+            "damping_ratios": [m.damping_ratio for m in self.modes],
+            "stable": self.stable,
+            "steady_state_gains": self.steady_state_gains,
+            "routh_hurwitz": self.routh_hurwitz.to_dict(),
+            "controllability": self.controllability.to_dict(),
+            "law_gains": self.law_gains,
+        }
+        if self.critical_speed is not None:
+            out["critical_speed_mps"] = self.critical_speed.critical_speed_mps
+            out["critical_speed_search"] = self.critical_speed.to_dict()
+        return out
+
+
+def linear_report(model_name: str, vehicle: Vehicle, law: Law | str | None,
+                  speed_mps: float, with_critical_speed: bool = False,
+                  speed_range_mps: tuple[float, float] = CRITICAL_SPEED_RANGE_MPS
+                  ) -> LinearReport:
+    """Eigen/Routh/controllability/steady-state analysis (and optionally critical speed)."""
+    law_obj = _law(law, vehicle)
+    cl = closed_loop(model_name, vehicle, law_obj, speed_mps)
+    ms = modes(cl.A)
+    stable = is_stable(cl.A)
+    try:
+        gains = steady_state_gains(cl)
+    except IncompatibleError:
+        gains = None
+    crit = critical_speed(model_name, vehicle, law_obj, speed_range_mps) \
+        if with_critical_speed else None
+    return LinearReport(vehicle.name, model_name, law_obj.name, cl.speed_mps, ms, stable,
+                        routh_hurwitz(cl.A), controllability(cl.A_open, cl.b_rear), gains,
+                        crit, law_obj.gains_dict(cl.speed_mps))

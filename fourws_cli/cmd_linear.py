@@ -1,0 +1,103 @@
+"""``fourws linear``: eigenvalues, damping, Routh-Hurwitz, steady-state gains of a linear model
+closed with a rear-steer law.
+
+Output (``--json``; keys are stable)::
+
+    {"vehicle", "model", "law", "speed_mps", "speed_kmh",
+     "eigenvalues": [[re, im], ...]            (1/s),
+     "natural_frequencies_hz": [...], "damping_ratios": [...], "stable": bool,
+     "steady_state_gains": {"output/input": gain} or null,
+     "routh_hurwitz": {"coefficients", "first_column", "conditions", "sign_changes", "stable",
+                       "array"},
+     "controllability": {...}, "law_gains": {...},
+     "critical_speed_mps": float or null        (with --critical-speed),
+     "transfer_functions": [...]                (with --transfer-functions),
+     "bode": {"frequencies_hz", "magnitude", "phase_deg", "units"}  (with --bode)}
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from fourws_cli._law_args import add_law_arguments, build_law
+from fourws_sim.errors import ParameterError
+from fourws_sim.params import load_vehicle
+
+HELP = "eigenvalues, damping, Routh-Hurwitz and steady-state gains of a linear model with a law"
+MODELS = ("2dof", "2dof-free", "2dof-lagged", "3dof")
+KMH_PER_MPS = 3.6
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the ``linear`` sub-parser."""
+    parser.add_argument("--vehicle", required=True,
+                        help="vehicle name (file stem under config/vehicles) or YAML path")
+    parser.add_argument("--model", required=True, choices=MODELS, help="linear model")
+    add_law_arguments(parser)
+    parser.add_argument("--speed-kmh", required=True, type=float,
+                        help="forward speed in km/h (> 0)")
+    parser.add_argument("--critical-speed", action="store_true",
+                        help="also search 1-100 m/s for the speed where stability is lost")
+    parser.add_argument("--transfer-functions", action="store_true",
+                        help="include the transfer functions (JSON)")
+    parser.add_argument("--bode", action="store_true",
+                        help="include Bode data, 0.01-10 Hz (JSON)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def _c(z: list[float]) -> str:
+    re, im = z
+    return f"{re:10.4f}" if im == 0.0 else f"{re:10.4f} {im:+.4f}j"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the analysis and print it; returns the exit code."""
+    from fourws_analysis import linear
+
+    if not args.speed_kmh > 0.0:
+        raise ParameterError("--speed-kmh", f"must be > 0, got {args.speed_kmh!r}")
+    vehicle = load_vehicle(args.vehicle)
+    law = build_law(args, vehicle)
+    speed = args.speed_kmh / KMH_PER_MPS
+    report = linear.linear_report(args.model, vehicle, law, speed,
+                                  with_critical_speed=args.critical_speed)
+    out = report.to_dict()
+    if args.transfer_functions or args.bode:
+        cl = linear.closed_loop(args.model, vehicle, law, speed)
+        if args.transfer_functions:
+            out["transfer_functions"] = [t.to_dict() for t in linear.transfer_functions(cl)]
+        if args.bode:
+            out["bode"] = linear.bode(cl).to_dict()
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0
+    print(f"{out['vehicle']}  model {out['model']}  law {out['law']}  "
+          f"U = {out['speed_kmh']:g} km/h ({out['speed_mps']:.3f} m/s)")
+    if out["law_gains"]:
+        print("law gains: " + ", ".join(f"{k} {v:.5g}" for k, v in out["law_gains"].items()))
+    print(f"{'eigenvalue (1/s)':>28} {'f_n (Hz)':>10} {'damping':>9}")
+    for z, f, d in zip(out["eigenvalues"], out["natural_frequencies_hz"],
+                       out["damping_ratios"]):
+        print(f"{_c(z):>28} {f:10.4f} {d:9.4f}")
+    print(f"stable: {'yes' if out['stable'] else 'NO'}")
+    rh = out["routh_hurwitz"]
+    print("Routh-Hurwitz: " + "; ".join(
+        f"{c['name']} ({c['value']:.5g}) {'ok' if c['satisfied'] else 'VIOLATED'}"
+        for c in rh["conditions"]))
+    ctrb = out["controllability"]
+    print(f"controllable by rear steer: {'yes' if ctrb['controllable'] else 'no'} "
+          f"(rank {ctrb['rank']}/{ctrb['n_states']})")
+    gains = out["steady_state_gains"]
+    if gains is None:
+        print("steady-state gains: none (zero eigenvalue)")
+    else:
+        print("steady-state gains:")
+        for k, v in gains.items():
+            print(f"  {k:<28} {v:12.6g}")
+    if args.critical_speed:
+        cs = out["critical_speed_mps"]
+        lo, hi = out["critical_speed_search"]["searched_range_mps"]
+        print("critical speed: " + (f"{cs:.3f} m/s ({cs * KMH_PER_MPS:.1f} km/h)" if cs
+                                    is not None else f"none (stable {lo:g}-{hi:g} m/s)"))
+    return 0
