@@ -23,6 +23,7 @@ MODELS: dict[str, str] = {
     "2dof-lagged": "fourws_sim.models.lagged2dof",
     "3dof": "fourws_sim.models.roll3dof",
     "2dof-cubic": "fourws_sim.models.cubic2dof",
+    "8dof": "fourws_sim.models.eightdof",
 }
 
 
