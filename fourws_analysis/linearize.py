@@ -88,12 +88,8 @@ class EigenSweep:
 
 def _trim(mod: Any, vehicle: Any, speed: float) -> tuple[np.ndarray, np.ndarray, Any]:
     """Straight-running trim of a model at ``speed``: (x0, u0, p)."""
-    try:
-        p = mod.params_for(vehicle, speed)
-        linear = True
-    except TypeError:
-        p = mod.params_for(vehicle)
-        linear = False
+    linear = hasattr(mod, "matrices")  # linear models take the speed as a parameter
+    p = mod.params_for(vehicle, speed) if linear else mod.params_for(vehicle)
     n_x, n_u = len(mod.STATE), len(mod.INPUT)
     if linear:
         return np.zeros(n_x), np.zeros(n_u), p

@@ -1,0 +1,350 @@
+"""Analysis of recorded runs: which metrics a run can give, computed, and compared.
+
+:func:`analyze_run` recognizes the maneuver from the run configuration and computes what it
+can give; a metric it cannot give is recorded with the reason (``RunAnalysis.unavailable``)
+instead of stopping the others:
+
+==========================================  =============================================
+maneuver                                    metrics
+==========================================  =============================================
+``swept_sine``, ``pulse``                   frequency response (full-record H1), modes
+``random_steer``, ``sine``                  frequency response (Welch H1)
+``step_steer``, ``ramp_steer``              ISO 7401 step metrics, identified eigenvalues
+``slow_ramp_steer``, ``constant_radius``    ISO 4138 gradients, understeer, char. speed
+every run with a vehicle                    eigenvalues of the linearized 8-DOF vs speed
+==========================================  =============================================
+
+Model overlays (analytic 2-DOF/3-DOF closed with the run's law, and the 8-DOF linearized
+numerically at the run's straight-running trim) need the vehicle mapping of the run config.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from fourws_analysis import frequency as fq
+from fourws_analysis import identify, iso4138, iso7401, linearize
+from fourws_analysis.bag import MetricUnavailableError, UniformRun
+from fourws_sim.errors import FourwsError
+
+STEP_MANEUVERS = ("step_steer", "ramp_steer")
+STEADY_MANEUVERS = ("slow_ramp_steer", "constant_radius")
+#: Speeds of the 8-DOF eigenvalue sweep, m/s (walking pace excluded; up to 144 km/h).
+SWEEP_SPEEDS_MPS = tuple(float(v) for v in np.arange(5.0, 40.01, 2.5))
+#: Driver inputs the frequency response is taken against.
+FR_INPUTS = ("front_wheel_angle_rad", "steering_wheel_angle_rad")
+
+Progress = Callable[[str], None]
+
+
+@dataclass
+class RunAnalysis:
+    """Everything computed for one run.
+
+    Attributes
+    ----------
+    run : UniformRun
+    speed_mps : float
+        Forward speed of the run (configuration, else median of the record), m/s.
+    frequency : dict of str to FrequencyResponse
+        Keyed ``"<output>/<input>"``.
+    frequency_metrics : dict of str to ResponseMetrics
+    models : dict of str to LinearSystem
+        Linear models for the overlays (``"2dof"``, ``"3dof"``, ``"8dof-lin"``).
+    step : iso7401.StepResult or None
+    steady : iso4138.SteadyStateHandling or None
+    modes : identify.IdentifiedModes or None
+    eig_sweep : linearize.EigenSweep or None
+    unavailable : dict of str to str
+        Metric -> why it could not be computed.
+    notes : list of str
+    """
+
+    run: UniformRun
+    speed_mps: float
+    vehicle: Any = None
+    frequency: dict[str, fq.FrequencyResponse] = field(default_factory=dict)
+    frequency_metrics: dict[str, fq.ResponseMetrics] = field(default_factory=dict)
+    models: dict[str, fq.LinearSystem] = field(default_factory=dict)
+    step: iso7401.StepResult | None = None
+    steady: iso4138.SteadyStateHandling | None = None
+    modes: identify.IdentifiedModes | None = None
+    eig_sweep: linearize.EigenSweep | None = None
+    unavailable: dict[str, str] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        """Run label."""
+        return self.run.name
+
+    @property
+    def law(self) -> str:
+        """Rear-steer law of the run (``fws`` when not recorded)."""
+        law = self.run.config.get("law", "fws")
+        if isinstance(law, Mapping):
+            law = law.get("name", law.get("type", "fws"))
+        return str(law or "fws")
+
+    def metrics(self) -> dict[str, Any]:
+        """Every metric as a JSON-ready mapping."""
+        out: dict[str, Any] = {
+            "maneuver": self.run.maneuver or None, "law": self.law,
+            "model": self.run.config.get("model"), "speed_mps": self.speed_mps,
+            "duration_s": float(self.run.time_s[-1] - self.run.time_s[0]),
+            "sample_period_s": self.run.dt_s,
+        }
+        if self.frequency_metrics:
+            out["frequency_response"] = {k: v.to_dict()
+                                         for k, v in self.frequency_metrics.items()}
+        if self.step is not None:
+            out["iso7401_step"] = self.step.to_dict()
+        if self.steady is not None:
+            out["iso4138_steady_state"] = self.steady.to_dict()
+        if self.modes is not None:
+            out["identified_modes"] = self.modes.to_dict()
+        if self.models:
+            out["model_eigenvalues_per_s"] = {
+                k: [[float(e.real), float(e.imag)] for e in _lateral_modes(m.eigenvalues)]
+                for k, m in self.models.items()}
+            out["model_steady_state_gains"] = {
+                k: {o: m.dc_gain(o) for o in m.C if np.linalg.matrix_rank(m.A) == m.A.shape[0]}
+                for k, m in self.models.items()}
+        if self.modes is not None and self.models:
+            out["identified_vs_model"] = {
+                k: [{"identified": [e.real, e.imag], "model": [p.real, p.imag],
+                     "relative_difference": rel}
+                    for e, p, rel in identify.match_eigenvalues(
+                        self.modes.eigenvalues, _lateral_modes(m.eigenvalues))]
+                for k, m in self.models.items()}
+        if self.eig_sweep is not None:
+            out["eigenvalues_vs_speed"] = self.eig_sweep.to_dict()
+        out["unavailable"] = dict(self.unavailable)
+        out["notes"] = list(self.notes)
+        return _jsonable(out)
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, Mapping):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        value = float(obj)
+        return value if math.isfinite(value) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    return obj
+
+
+def _lateral_modes(eig: np.ndarray) -> np.ndarray:
+    """Drop the zero eigenvalues (position, heading) and NaNs."""
+    eig = np.asarray(eig, dtype=complex)
+    keep = np.isfinite(eig) & (np.abs(eig) > 1e-6)
+    return eig[keep][np.argsort(-eig[keep].real)]
+
+
+def _vehicle(run: UniformRun) -> Any:
+    from fourws_sim.params import vehicle_from_mapping
+
+    data = run.config.get("vehicle")
+    if not isinstance(data, Mapping):
+        raise MetricUnavailableError("run_config has no 'vehicle' mapping: model overlays and "
+                                     "eigenvalues need it")
+    return vehicle_from_mapping(data, source=f"{run.name}:/fourws/run_config")
+
+
+def _speed(run: UniformRun) -> float:
+    for key in ("speed_mps", "initial_speed_mps"):
+        value = run.config.get(key)
+        if isinstance(value, (int, float)) and value > 0:
+            return float(value)
+    man = run.config.get("maneuver")
+    if isinstance(man, Mapping):
+        for key in ("speed_mps", "initial_speed_mps"):
+            value = man.get(key)
+            if isinstance(value, (int, float)) and value > 0:
+                return float(value)
+    speed = run.channels.get("speed_mps")
+    if speed is None or not np.any(speed > 0):
+        raise MetricUnavailableError("no forward speed in the run (config or state)")
+    return float(np.median(speed))
+
+
+def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws") -> fq.LinearSystem:
+    """The 8-DOF model linearized at straight running (finite differences), law closed.
+
+    The law's gains (:meth:`fourws_control.base.Law.gains` at the speed) are applied to the
+    8-DOF states with the same meaning (yaw rate, roll, roll rate, lateral velocity); the
+    actuator limits are inactive for small signals.
+    """
+    from fourws_sim.models import get_model
+
+    mod = get_model("8dof")
+    p = mod.params_for(vehicle)
+    x0 = mod.initial_state(p, speed_mps)
+    u0 = np.zeros(len(mod.INPUT))
+    a, b = linearize.jacobians(mod.derivatives, x0, u0, p)
+    s, i = mod.STATE, mod.INPUT
+    n = a.shape[0]
+    k_x = np.zeros(n)
+    k_f = 0.0
+    if law != "fws":
+        from fourws_control import Signal, make_law
+
+        k = make_law(law, vehicle).gains(speed_mps)
+        k_f = float(k[Signal.DELTA_F])
+        k_x[s.R] = k[Signal.YAW_RATE]
+        k_x[s.PHI] = k[Signal.ROLL]
+        k_x[s.P] = k[Signal.ROLL_RATE]
+        k_x[s.V] = k[Signal.LATERAL_VELOCITY]
+    a_cl = a + np.outer(b[:, i.DELTA_R], k_x)
+    b_cl = b[:, i.DELTA_F] + b[:, i.DELTA_R] * k_f
+    e = np.eye(n)
+    C = {"yaw_rate_radps": e[s.R], "sideslip_rad": e[s.V] / speed_mps,
+         "lateral_accel_mps2": a_cl[s.V] + speed_mps * e[s.R], "roll_rad": e[s.PHI],
+         "rear_wheel_angle_rad": k_x}
+    D = {"yaw_rate_radps": 0.0, "sideslip_rad": 0.0, "lateral_accel_mps2": float(b_cl[s.V]),
+         "roll_rad": 0.0, "rear_wheel_angle_rad": k_f}
+    return fq.LinearSystem(f"8dof linearized {law}", a_cl, b_cl, C, D)
+
+
+def _try(result: RunAnalysis, metric: str, fn: Callable[[], Any]) -> Any:
+    try:
+        return fn()
+    except FourwsError as exc:  # MetricUnavailableError, ParameterError, ...
+        result.unavailable[metric] = str(exc)
+    except np.linalg.LinAlgError as exc:
+        result.unavailable[metric] = f"linear algebra failed: {exc}"
+    return None
+
+
+def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
+                progress: Progress | None = None) -> RunAnalysis:
+    """Compute every metric ``run`` can give (see the module docstring).
+
+    Parameters
+    ----------
+    run : UniformRun
+    eig_sweep : bool
+        Also compute the eigenvalues of the linearized 8-DOF vs speed.
+    progress : callable, optional
+        Called with a short description before each step.
+    """
+    tick = progress or (lambda _msg: None)
+    try:
+        speed = _speed(run)
+    except MetricUnavailableError as exc:
+        speed = math.nan
+        notes = [str(exc)]
+    else:
+        notes = []
+    res = RunAnalysis(run=run, speed_mps=speed, notes=notes)
+    man = run.maneuver
+    if not man:
+        res.notes.append("maneuver not recognized (run_config has no maneuver.type): "
+                         "metrics chosen from the data are skipped")
+    ch = run.channels
+    t = run.time_s
+
+    tick(f"{run.name}: linear models")
+    vehicle = _try(res, "model_overlays", lambda: _vehicle(run))
+    res.vehicle = vehicle
+    if vehicle is not None and math.isfinite(speed):
+        for model in ("2dof", "3dof"):
+            if model == "3dof" and vehicle.roll is None:
+                continue
+            sys_ = _try(res, f"model_{model}",
+                        lambda m=model: fq.linear_system(vehicle, m, speed, res.law))
+            if sys_ is not None:
+                res.models[model] = sys_
+        if vehicle.body is not None:
+            sys8 = _try(res, "model_8dof_linearized",
+                        lambda: eightdof_linear_system(vehicle, speed, res.law))
+            if sys8 is not None:
+                res.models["8dof-lin"] = sys8
+
+    # frequency response
+    if man in fq.FREQUENCY_MANEUVERS:
+        tick(f"{run.name}: frequency response")
+        method = "transient" if man in fq.TRANSIENT_MANEUVERS else "welch"
+        for inp in FR_INPUTS:
+            if inp not in ch:
+                res.unavailable[f"frequency_response/{inp}"] = f"no {inp} recorded"
+                continue
+            for out in fq.OUTPUTS:
+                if out not in ch or (out == "roll_rad" and not np.any(ch[out])):
+                    continue
+                key = f"{out}/{inp}"
+                fr = _try(res, f"frequency_response/{key}", lambda o=out, i=inp: (
+                    fq.estimate_response(ch[i], ch[o], run.dt_s, method=method, output=o,
+                                         input_name=i)))
+                if fr is None:
+                    continue
+                res.frequency[key] = fr
+                met = _try(res, f"frequency_metrics/{key}",
+                           lambda f=fr: fq.response_metrics(f))
+                if met is not None:
+                    res.frequency_metrics[key] = met
+    else:
+        res.unavailable["frequency_response"] = (
+            f"needs a {', '.join(fq.FREQUENCY_MANEUVERS)} run (an excitation band); "
+            f"this run is {man or 'unrecognized'}")
+
+    # ISO 7401 step and modes
+    if man in STEP_MANEUVERS or man == "pulse":
+        tick(f"{run.name}: step metrics and modes")
+        if man in STEP_MANEUVERS:
+            responses = {k: ch[k] for k in ("yaw_rate_radps", "lateral_accel_mps2") if k in ch}
+            res.step = _try(res, "iso7401_step", lambda: iso7401.step_metrics(
+                t, ch["front_wheel_angle_rad"], responses, ch.get("sideslip_rad")))
+        outs = [ch[k] for k in ("yaw_rate_radps", "lateral_velocity_mps") if k in ch]
+        res.modes = _try(res, "identified_modes", lambda: identify.identify_modes(
+            t, ch["front_wheel_angle_rad"], outs, order=2))
+    else:
+        res.unavailable["iso7401_step"] = (f"needs a step_steer or ramp_steer run; this run is "
+                                           f"{man or 'unrecognized'}")
+
+    # ISO 4138
+    if man in STEADY_MANEUVERS:
+        tick(f"{run.name}: steady-state handling")
+
+        def steady() -> iso4138.SteadyStateHandling:
+            if vehicle is None:
+                raise MetricUnavailableError("understeer gradient needs the wheelbase "
+                                             "(vehicle mapping in run_config)")
+            settle = t >= t[0] + 2.0  # skip the start transient
+            return iso4138.steady_state_handling(
+                ch["lateral_accel_mps2"][settle], ch["front_wheel_angle_rad"][settle],
+                ch["yaw_rate_radps"][settle], ch["speed_mps"][settle],
+                vehicle.chassis.wheelbase_m,
+                ch["sideslip_rad"][settle] if "sideslip_rad" in ch else None,
+                ch["roll_rad"][settle] if "roll_rad" in ch else None)
+        res.steady = _try(res, "iso4138_steady_state", steady)
+    else:
+        res.unavailable["iso4138_steady_state"] = (
+            f"needs a slow_ramp_steer or constant_radius run; this run is "
+            f"{man or 'unrecognized'}")
+
+    if eig_sweep and vehicle is not None and vehicle.body is not None:
+        tick(f"{run.name}: 8-DOF eigenvalues vs speed")
+
+        def sweep() -> linearize.EigenSweep:
+            rows = [eightdof_linear_system(vehicle, v, res.law).eigenvalues
+                    for v in SWEEP_SPEEDS_MPS]
+            width = max(len(_lateral_modes(r)) for r in rows)
+            arr = np.full((len(rows), width), np.nan, dtype=complex)
+            for k, r in enumerate(rows):
+                lat = _lateral_modes(r)
+                arr[k, :lat.size] = lat
+            return linearize.EigenSweep("8dof", np.asarray(SWEEP_SPEEDS_MPS), arr)
+        res.eig_sweep = _try(res, "eigenvalues_vs_speed", sweep)
+    return res

@@ -1,0 +1,116 @@
+"""``fourws analyze BAG... [--report DIR] [--json]``: metrics and report of recorded runs."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from fourws_sim.errors import FourwsError
+
+HELP = "analyse recorded runs (rosbag2 MCAP): frequency response, ISO 7401/4138, stability"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the sub-parser."""
+    parser.add_argument("bags", nargs="+", metavar="BAG", help="bag directory or .mcap file")
+    parser.add_argument("--report", metavar="DIR",
+                        help="write DIR/index.html, PNG plots and DIR/metrics.json")
+    parser.add_argument("--json", action="store_true", help="print every metric as JSON")
+    parser.add_argument("--dt", type=float, default=None, metavar="S",
+                        help="resampling period in s (default: median state period)")
+    parser.add_argument("--no-sweep", action="store_true",
+                        help="skip the 8-DOF eigenvalues-vs-speed sweep")
+    parser.add_argument("--timing", action="store_true", help="print the elapsed time")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+class ProgressBar:
+    """A one-line progress bar on stderr (only when stderr is a terminal or forced)."""
+
+    def __init__(self, total: int, enabled: bool) -> None:
+        self.total = max(total, 1)
+        self.done = 0
+        self.enabled = enabled
+
+    def __call__(self, message: str) -> None:
+        self.done = min(self.done + 1, self.total)
+        if not self.enabled:
+            return
+        width = 24
+        filled = int(width * self.done / self.total)
+        sys.stderr.write(f"\r[{'#' * filled}{'.' * (width - filled)}] "
+                         f"{message[:60]:<60}")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        """End the bar's line."""
+        if self.enabled:
+            sys.stderr.write("\r" + " " * 90 + "\r")
+            sys.stderr.flush()
+
+
+def run(args: argparse.Namespace) -> int:
+    """Analyse the bags; exit 0 if all were analysed, 2 if none could be, 1 if some failed."""
+    from fourws_analysis import bag as bagmod
+    from fourws_analysis.compare import analyze_run
+    from fourws_analysis.report import write_report
+
+    start = time.perf_counter()
+    steps_per_bag = 7
+    bar = ProgressBar(len(args.bags) * steps_per_bag + (6 if args.report else 0),
+                      enabled=not args.quiet and sys.stderr.isatty())
+    analyses = []
+    failures: dict[str, str] = {}
+    for path in args.bags:
+        bar(f"reading {path}")
+        try:
+            run_data = bagmod.load_bag(path)
+            uniform = bagmod.resample(run_data, args.dt)
+        except FourwsError as exc:
+            failures[path] = str(exc)
+            continue
+        result = analyze_run(uniform, eig_sweep=not args.no_sweep, progress=bar)
+        result.notes.extend(run_data.warnings)
+        analyses.append(result)
+    index = None
+    if args.report:
+        index = write_report(analyses, args.report, failures, progress=bar)
+    bar.close()
+    elapsed = time.perf_counter() - start
+    for path, why in failures.items():
+        print(f"fourws analyze: error: {why}", file=sys.stderr)
+    for r in analyses:
+        for metric, why in r.unavailable.items():
+            if _expected(metric, r):
+                continue
+            print(f"fourws analyze: {r.name}: {metric} not computed: {why}", file=sys.stderr)
+    if args.json:
+        print(json.dumps({"runs": {r.name: r.metrics() for r in analyses},
+                          "failed_bags": failures}, indent=2))
+    elif not args.report:
+        for r in analyses:
+            _print_summary(r)
+    if index is not None:
+        print(f"report: {index}")
+    if args.timing:
+        print(f"analysed {len(analyses)} bag(s) in {elapsed:.2f} s", file=sys.stderr)
+    if not analyses:
+        raise FourwsError("no bag could be analysed: " + "; ".join(failures.values()))
+    return 1 if failures else 0
+
+
+def _expected(metric: str, r: object) -> bool:
+    """Metrics a maneuver is not meant to give are not worth a warning line."""
+    return metric in ("frequency_response", "iso7401_step", "iso4138_steady_state")
+
+
+def _print_summary(r: object) -> None:
+    metrics = r.metrics()  # type: ignore[attr-defined]
+    print(f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}, "  # type: ignore
+          f"{metrics['speed_mps']:.1f} m/s" if metrics["speed_mps"] else f"{r.name}")  # type: ignore
+    for key in ("frequency_response", "iso7401_step", "iso4138_steady_state",
+                "identified_modes"):
+        if key in metrics:
+            print(f"  {key}: {json.dumps(metrics[key])[:300]}")
