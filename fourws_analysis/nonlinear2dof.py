@@ -254,6 +254,16 @@ def _vdot(x: np.ndarray, P: np.ndarray, p: cubic2dof.Params) -> float:
     return float(2.0 * x @ P @ cubic2dof.derivatives(0.0, x, _ZERO_INPUT, p))
 
 
+def _cubic_part(x: np.ndarray, p: cubic2dof.Params) -> np.ndarray:
+    """The cubic terms h(x) of the zero-steer model, f(x) = A x + h(x) (exact, no rounding)."""
+    alpha_f = (x[0] + p.a_m * x[1]) / p.speed_mps
+    alpha_r = (x[0] - p.b_m * x[1]) / p.speed_mps
+    fyf3 = p.cf_n_per_rad * p.kf_per_rad2 * alpha_f ** 3
+    fyr3 = p.cr_n_per_rad * p.kr_per_rad2 * alpha_r ** 3
+    return np.array([(fyf3 + fyr3) / p.mass_kg,
+                     (p.a_m * fyf3 - p.b_m * fyr3) / p.yaw_inertia_kgm2])
+
+
 def lyapunov_estimate(vehicle: Vehicle, speed_mps: float, *,
                       n_angles: int = 20001) -> LyapunovEstimate:
     r"""Quadratic Lyapunov estimate of the straight-motion stability region (Table 7.2).
@@ -282,8 +292,7 @@ def lyapunov_estimate(vehicle: Vehicle, speed_mps: float, *,
 
     def level_along(theta: float) -> float:
         e = np.array([np.cos(theta), np.sin(theta)])
-        h = cubic2dof.derivatives(0.0, e, _ZERO_INPUT, p) - A @ e
-        q4 = 2.0 * e @ P @ h
+        q4 = 2.0 * e @ P @ _cubic_part(e, p)
         return float(e @ P @ e / q4) if q4 > 0.0 else np.inf
 
     thetas = np.linspace(0.0, np.pi, n_angles)  # V1 and its derivative are odd-symmetric
