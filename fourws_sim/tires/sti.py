@@ -21,7 +21,7 @@ Model (original units: load lb, length ft/in, pressure psi, angle rad; ``S`` is 
 ratio, ``S = -kappa``, 0 free rolling, 1 locked)::
 
     a_p0  = 0.0768 sqrt(Fz FZT) / (TW (TP + 5))            contact length at Fx = 0, ft  (C.1)
-    a_p   = a_p0 (1 - KA Fx_b / Fz)                        contact length under braking force
+    a_p   = a_p0 (1 - KA |Fx| / Fz)                        contact length under Fx
     C_a   = A0 + A1 Fz - (A1/A2) Fz^2                      cornering stiffness, lb/rad  (C.2)
     C_s   = CS/FZ * Fz                                     longitudinal stiffness, lb   (C.3)
     (K_s = 2 C_a / a_p0^2,  K_c = 2 C_s / a_p0^2 are the paper's stiffness coefficients)
@@ -66,8 +66,10 @@ Choices where the paper is silent or unreadable (an expert's choice, reason give
   paper's simulations ("Tire camber angle is assumed zero") and ``forces`` has no camber input.
 * Cornering stiffness is held at its maximum beyond the vertex of the parabola
   ``Fz = A2/2`` (1450 lb, 6.45 kN) instead of falling to zero at 2937 lb.
-* Drive slip (``kappa > 0``) uses the same equations with ``S = -kappa``; ``q`` is capped at 1
-  (full sliding) so that wheel spin (``|kappa| > 1``) never drives the friction negative.
+* Drive slip (``kappa > 0``) uses the same equations with ``S = -kappa`` (the original is
+  written for braking, ``0 <= S <= 1``): the tire is symmetric in drive and brake, so ``a_p``
+  shortens with ``|Fx|`` either way, and ``q`` is capped at 1 (full sliding) so that wheel
+  spin (``|kappa| > 1``) never drives the friction negative.
 * ``vx_mps`` is not used: with ``SN = SNT`` fixed the model has no speed term.
 
 YAML (``tire.sti`` mapping, every key optional, default = Table C.1 in :data:`TABLE_C1`)::
@@ -264,7 +266,7 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
         mag = mu_slide * fz * f
         fx_b = mag * gx / g
         fy_b = mag * gy / g
-        ratio = 1.0 - coeffs[_KA] * fx_b / fz
+        ratio = 1.0 - coeffs[_KA] * abs(fx_b) / fz
         if ratio < 0.0:
             ratio = 0.0
 
