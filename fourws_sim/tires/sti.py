@@ -266,9 +266,12 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
         mag = mu_slide * fz * f
         fx_b = mag * gx / g
         fy_b = mag * gy / g
-        ratio = 1.0 - coeffs[_KA] * abs(fx_b) / fz
-        if ratio < 0.0:
-            ratio = 0.0
+        new_ratio = 1.0 - coeffs[_KA] * abs(fx_b) / fz
+        if new_ratio < 0.0:
+            new_ratio = 0.0
+        if new_ratio == ratio:  # no longitudinal force (or KA = 0): pass 1 would repeat pass 0
+            break
+        ratio = new_ratio
 
     # original model: Fy positive for positive alpha, Fx_b positive braking; fourws frame:
     fx_lb = -fx_b
