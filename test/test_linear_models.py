@@ -184,6 +184,28 @@ def test_lagged_model_steady_state_independent_of_sigma_section_5_7():
     assert lagged.params_for(v, 20.0).relaxation_length_m == pytest.approx(0.414)
 
 
+def test_lagged_fws_understeer_stable_at_all_speeds_section_5_5():
+    # "If the vehicle is understeer ... all the coefficients of the characteristic equation
+    # are positive and thus they yield no instability condition" (FWS)
+    v = load_vehicle("table_5_1")
+    lagged = get_model("2dof-lagged")
+    for u in (0.5, 2.0, 5.0, 15.0, 40.0, 80.0):
+        assert np.linalg.eigvals(lagged.matrices(v, u)[0]).real.max() < 0.0
+
+
+def test_lagged_oversteer_critical_speed_eq_5_65_equals_2dof():
+    # eq. 5.65: the FWS critical speed with lagged force is the 2-DOF one,
+    # L sqrt(Cf Cr / (m (a Cf - b Cr))), whatever sigma
+    v = load_vehicle("table_4_1_set_2")
+    m, _, a, b, cf, cr = _axle(v)
+    u_crit = (a + b) * np.sqrt(cf * cr / (m * (a * cf - b * cr)))
+    lagged = get_model("2dof-lagged")
+    for sigma in (0.2, 0.414):
+        found = brentq(lambda u: np.linalg.eigvals(
+            lagged.matrices(v, u, relaxation_length_m=sigma)[0]).real.max(), 30.0, 70.0)
+        assert found == pytest.approx(u_crit, rel=1e-6)
+
+
 def test_lagged_model_low_speed_oscillation_section_5_5_1():
     # Figures 5.5-5.7: at 15 km/h the FWS vehicle with lagged force oscillates, while the
     # 2-DOF model is non-oscillatory (real eigenvalues) at that speed
