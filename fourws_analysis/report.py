@@ -16,7 +16,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from fourws_analysis.compare import RunAnalysis
-from fourws_analysis.frequency import COHERENCE_MIN, FrequencyResponse
+from fourws_analysis.frequency import COHERENCE_MIN
 
 #: Time-history panels: channel, label, scale to display unit, unit.
 HISTORY_PANELS = (
@@ -34,6 +34,8 @@ BODE_OUTPUTS = (
     ("sideslip_rad", "sideslip / δf", "rad/rad"),
     ("roll_rad", "roll / δf", "rad/rad"),
 )
+#: Model gains are drawn no lower than this below the lowest measured gain, dB.
+GAIN_FLOOR_BELOW_DB = 20.0
 _MODEL_STYLES = {"2dof": ("--", "0.25"), "3dof": (":", "0.1"), "8dof-lin": ("-.", "tab:red")}
 
 Progress = Callable[[str], None]
@@ -87,6 +89,9 @@ def plot_bode(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
                              gridspec_kw={"height_ratios": [3, 3, 1.3]}, squeeze=False)
     for col, (chan, title, unit) in enumerate(outputs):
         ax_g, ax_p, ax_c = axes[:, col]
+        floor_db = min((float(np.nanmin(r.frequency[f"{chan}/front_wheel_angle_rad"].gain_db))
+                        for r in runs if f"{chan}/front_wheel_angle_rad" in r.frequency),
+                       default=-100.0) - GAIN_FLOOR_BELOW_DB
         for k, r in enumerate(runs):
             fr = r.frequency.get(f"{chan}/front_wheel_angle_rad")
             if fr is None:
@@ -107,7 +112,9 @@ def plot_bode(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
                 model = system.response(chan, f)
                 style, mcolor = _MODEL_STYLES.get(name, ("--", "0.4"))
                 lbl = f"{name} model" + (f" ({r.name})" if len(runs) > 1 else "")
-                ax_g.semilogx(f, model.gain_db, style, color=mcolor if len(runs) == 1 else color,
+                # a model whose gain is zero (e.g. sideslip under a zero-sideslip law) would
+                # squash the axis to -300 dB: show it at the floor instead
+                ax_g.semilogx(f, np.maximum(model.gain_db, floor_db), style, color=mcolor if len(runs) == 1 else color,
                               lw=1.2, label=lbl)
                 ph = model.phase_deg
                 ax_p.semilogx(f, ph, style, color=mcolor if len(runs) == 1 else color, lw=1.2)
