@@ -5,7 +5,7 @@ section 4.3.2 (the MF-Tyre 5.2 equations: pure slip 4.E1-4.E30, combined slip wi
 cosine weighting functions 4.E50-4.E78, aligning moment with the equivalent slip angle).
 Default coefficients: the same book, Appendix 3, Table A3.1, the passenger-car tire
 205/60R15 91V at 2.2 bar (nominal load ``FNOMIN = 4000 N``, unloaded radius ``R0 = 0.3135 m``),
-printed there in the book's sign convention in which the lateral coefficients give
+(transcribed by hand from the printed table), given there in the book's sign convention in which the lateral coefficients give
 ``Fy < 0`` for ``alpha > 0`` (``PDY1 = -0.990``, ``PKY1 = -14.95``): exactly fourws's
 ``Fy = -C_alpha alpha``, so the values are used as printed. Only the coefficients the
 zero-camber equations use are kept (camber terms PDY3, PEY4, PKY3, PHY3, PVY3/4, QBZ4/5,

@@ -54,7 +54,10 @@ Choices where the paper is silent or unreadable (an expert's choice, reason give
 * ``B1, B3, B4``: (C.6) is a sum of three terms of which only the constant ``B3 = 0.85``
   survives with Table C.1 (``B1 = B4 = 0``), so their order does not change any result.
 * ``SNT`` (test skid number, 85) enters as ``mu_road = SN / SNT``: the ``mu`` argument of
-  :func:`forces` *is* that ratio (1.0 = the test surface), so SNT is kept for the record only.
+  :func:`forces` *is* that ratio (1.0 = the test surface), so SNT is kept for the record only
+  (consistently, ``SNT/100 = 0.85 = B3``, the nominal friction).
+* Table C.1's OCR writes ``Ai, Bi, Ci, Gi, ki`` where the list of symbols has subscript 1
+  (``A1, B1, C1, G1``); "ki" is therefore ``K1`` and "CS/F3" is ``CS/FZ``.
 * ``K1 = -0.0002`` ("aligning torque coefficient", OCR "ki"): read as ft/lb in
   ``K_m = K1 Fz`` of (C.5), the moment of the longitudinal force about the laterally deflected
   contact patch, ``Mz = K1 Fx Fy`` (``-1/K1`` = 5000 lb/ft lateral carcass stiffness, the
