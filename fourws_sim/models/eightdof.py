@@ -87,7 +87,7 @@ Rolling resistance (``tire.rolling_resistance`` :math:`f_r`, default 0) is a tor
 :math:`f_r F_z R` opposing wheel spin (part of the clamped friction torque above).
 
 Two implementations: :func:`derivatives` is the readable NumPy reference (the model contract);
-:func:`make_kernels` builds the numba-compiled right-hand side and fixed-step integrator loops
+:func:`kernels_for` gives the numba-compiled right-hand side and fixed-step integrator loops
 for one tire function, which :mod:`fourws_sim.simulator` uses. ``test/test_eightdof.py`` checks
 they agree to round-off.
 """
@@ -544,7 +544,8 @@ def derivatives(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray
 # ---------------------------------------------------------------------------------------------
 
 class Kernels(NamedTuple):
-    """Numba-compiled functions of the 8-DOF model for one tire function.
+    """Numba-compiled functions of the 8-DOF model for one tire model
+    (:mod:`fourws_sim.models.eightdof_kernels`).
 
     Attributes
     ----------
@@ -568,243 +569,38 @@ _KERNEL_CACHE: dict[str, Kernels] = {}
 
 
 def kernels_for(tire_name: str) -> Kernels:
-    """Compiled kernels for the tire model ``tire_name`` (built once per process)."""
+    """Compiled kernels for the tire model ``tire_name`` (one variant per tire, built once per
+    process and cached on disk by numba).
+
+    The kernel source :mod:`fourws_sim.models.eightdof_kernels` is loaded once per tire under
+    its own module name with the tire's ``forces`` as a module global, so each variant calls
+    its tire directly (inlined by LLVM) and numba's on-disk cache keeps one entry per variant
+    (a closure over a dispatcher would miss the cache in every new process).
+
+    Raises
+    ------
+    UnknownNameError
+        If ``tire_name`` is not a known tire model.
+    """
     if tire_name not in _KERNEL_CACHE:
+        import importlib.util
+        import sys
+
+        from fourws_sim.models import eightdof_kernels
         from fourws_sim.tires import get_tire
 
-        _KERNEL_CACHE[tire_name] = make_kernels(get_tire(tire_name).forces)
+        get_tire(tire_name)  # raise UnknownNameError before building anything
+        name = f"{eightdof_kernels.__name__}_{tire_name}"
+        module = sys.modules.get(name)
+        if module is None:
+            spec = importlib.util.spec_from_file_location(name, eightdof_kernels.__file__)
+            assert spec is not None and spec.loader is not None
+            module = importlib.util.module_from_spec(spec)
+            module.TIRE_NAME = tire_name  # type: ignore[attr-defined]
+            sys.modules[name] = module
+            spec.loader.exec_module(module)
+        _KERNEL_CACHE[tire_name] = Kernels(module.rhs, module.rk4, module.euler)
     return _KERNEL_CACHE[tire_name]
-
-
-def make_kernels(tire_forces: Callable[..., tuple[float, float, float]]) -> Kernels:
-    """Compile the 8-DOF right-hand side and integrator loops around ``tire_forces``.
-
-    Parameters
-    ----------
-    tire_forces : callable
-        A tire module's ``forces(fz, alpha, kappa, vx, mu, coeffs)`` (plain Python that numba
-        can compile, or an already compiled dispatcher).
-
-    Returns
-    -------
-    Kernels
-    """
-    import numba
-
-    if isinstance(tire_forces, numba.core.dispatcher.Dispatcher):
-        tire = tire_forces
-    else:
-        tire = numba.njit(cache=True, fastmath=False)(tire_forces)
-
-    i_u, i_v, i_r, i_phi, i_p = int(STATE.U), int(STATE.V), int(STATE.R), int(STATE.PHI), \
-        int(STATE.P)
-    i_w0, i_x, i_y, i_psi = int(STATE.OMEGA_FL), int(STATE.X), int(STATE.Y), int(STATE.PSI)
-    i_ax, i_ay, i_al0 = int(STATE.AX_LT), int(STATE.AY_LT), int(STATE.ALPHA_FL)
-    j_df, j_dr, j_d0, j_b0 = int(INPUT.DELTA_F), int(INPUT.DELTA_R), int(INPUT.DRIVE_FL), \
-        int(INPUT.BRAKE_FL)
-    P = PARAM
-    k_m, k_ms, k_iz, k_ix, k_ixz = int(P.M), int(P.MS), int(P.IZ), int(P.IX), int(P.IXZ)
-    k_a, k_b, k_tf, k_tr, k_hcg = int(P.A), int(P.B), int(P.TF), int(P.TR), int(P.H_CG)
-    k_h, k_rcf, k_rcr, k_hu = int(P.H_ROLL), int(P.H_RC_F), int(P.H_RC_R), int(P.H_U)
-    k_rw, k_iw, k_kf, k_kr = int(P.R_W), int(P.I_W), int(P.K_PHI_F), int(P.K_PHI_R)
-    k_cf, k_cr, k_ef, k_er = int(P.C_PHI_F), int(P.C_PHI_R), int(P.EPS_F), int(P.EPS_R)
-    k_mu, k_frr, k_sig, k_vmin = int(P.MU), int(P.F_RR), int(P.SIGMA), int(P.V_MIN)
-    k_tlt, k_tb, k_g = int(P.TAU_LT), int(P.TAU_B), int(P.G)
-    n_state = N_STATE
-    a_fz, a_al, a_ka, a_fx, a_fy, a_mz = _AUX_FZ, _AUX_ALPHA, _AUX_KAPPA, _AUX_FX, _AUX_FY, \
-        _AUX_MZ
-    a_df, a_dr, a_ax, a_ay = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY
-
-    @numba.njit(cache=True)
-    def rhs(x, u, q, cf, cr, dx, aux):  # pragma: no cover - compiled
-        U = x[i_u]
-        V = x[i_v]
-        r = x[i_r]
-        phi = x[i_phi]
-        pr = x[i_p]
-        psi = x[i_psi]
-        m = q[k_m]
-        ms = q[k_ms]
-        g = q[k_g]
-        a = q[k_a]
-        b = q[k_b]
-        L = a + b
-        tf = q[k_tf]
-        tr = q[k_tr]
-        rw = q[k_rw]
-        iw = q[k_iw]
-        vmin = q[k_vmin]
-        sigma = q[k_sig]
-        mu = q[k_mu]
-        mu_ = m - ms
-        delta_f = u[j_df] + q[k_ef] * phi
-        delta_r = u[j_dr] + q[k_er] * phi
-        ax_lt = x[i_ax]
-        ay_lt = x[i_ay]
-        d_long = 0.5 * m * ax_lt * q[k_hcg] / L
-        m_front = m * b / L
-        m_rear = m * a / L
-        d_lat_f = (q[k_kf] * phi + q[k_cf] * pr + m_front * (ms / m) * q[k_rcf] * ay_lt
-                   + m_front * (mu_ / m) * q[k_hu] * ay_lt) / tf
-        d_lat_r = (q[k_kr] * phi + q[k_cr] * pr + m_rear * (ms / m) * q[k_rcr] * ay_lt
-                   + m_rear * (mu_ / m) * q[k_hu] * ay_lt) / tr
-        st_f = m * g * b / (2.0 * L)
-        st_r = m * g * a / (2.0 * L)
-        cdf = math.cos(delta_f)
-        sdf = math.sin(delta_f)
-        cdr = math.cos(delta_r)
-        sdr = math.sin(delta_r)
-        sum_fx = 0.0
-        sum_fy = 0.0
-        sum_n = 0.0
-        for i in range(4):
-            if i < 2:
-                xw = a
-                cd = cdf
-                sd = sdf
-                fz = st_f - d_long
-                dl = d_lat_f
-                yw = 0.5 * tf
-            else:
-                xw = -b
-                cd = cdr
-                sd = sdr
-                fz = st_r + d_long
-                dl = d_lat_r
-                yw = 0.5 * tr
-            if i == 0 or i == 2:
-                fz -= dl
-            else:
-                fz += dl
-                yw = -yw
-            if fz < 0.0:
-                fz = 0.0
-            vxb = U - r * yw
-            vyb = V + r * xw
-            vx = vxb * cd + vyb * sd
-            vy = -vxb * sd + vyb * cd
-            avx = abs(vx)
-            den = avx if avx > vmin else vmin
-            alpha = math.atan2(vy, den)
-            om = x[i_w0 + i]
-            kappa = (om * rw - vx) / den
-            if sigma > 0.0:
-                al_lag = x[i_al0 + i]
-                dx[i_al0 + i] = den / sigma * (alpha - al_lag)
-                alpha_t = al_lag
-            else:
-                dx[i_al0 + i] = 0.0
-                alpha_t = alpha
-            if i < 2:
-                fx, fy, mz = tire(fz, alpha_t, kappa, avx, mu, cf)
-            else:
-                fx, fy, mz = tire(fz, alpha_t, kappa, avx, mu, cr)
-            fxb = fx * cd - fy * sd
-            fyb = fx * sd + fy * cd
-            sum_fx += fxb
-            sum_fy += fyb
-            sum_n += xw * fyb - yw * fxb + mz
-            brake = u[j_b0 + i]
-            if brake < 0.0:
-                brake = 0.0
-            cap = brake + q[k_frr] * fz * rw
-            hold = iw * abs(om) / q[k_tb]
-            tfric = cap if cap < hold else hold
-            if om > 0.0:
-                tfric = -tfric
-            elif om == 0.0:
-                tfric = 0.0
-            dx[i_w0 + i] = (u[j_d0 + i] - rw * fx + tfric) / iw
-            aux[a_fz + i] = fz
-            aux[a_al + i] = alpha_t
-            aux[a_ka + i] = kappa
-            aux[a_fx + i] = fx
-            aux[a_fy + i] = fy
-            aux[a_mz + i] = mz
-        c = math.cos(phi)
-        s = math.sin(phi)
-        msh = ms * q[k_h]
-        mshc = msh * c
-        iz = q[k_iz]
-        ixz = q[k_ixz]
-        rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
-        rhs_l = (mshc * U * r + msh * g * s - (q[k_kf] + q[k_kr]) * phi
-                 - (q[k_cf] + q[k_cr]) * pr)
-        det = q[k_ix] - mshc * mshc / m - ixz * ixz / iz
-        pd = (rhs_l + mshc * rhs_y / m + ixz * sum_n / iz) / det
-        vd = (rhs_y + mshc * pd) / m
-        rd = (sum_n + ixz * pd) / iz
-        ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
-        ax = ud - V * r
-        ay = vd + U * r
-        dx[i_u] = ud
-        dx[i_v] = vd
-        dx[i_r] = rd
-        dx[i_phi] = pr
-        dx[i_p] = pd
-        cps = math.cos(psi)
-        sps = math.sin(psi)
-        dx[i_x] = U * cps - V * sps
-        dx[i_y] = U * sps + V * cps
-        dx[i_psi] = r
-        dx[i_ax] = (ax - ax_lt) / q[k_tlt]
-        dx[i_ay] = (ay - ay_lt) / q[k_tlt]
-        aux[a_df] = delta_f
-        aux[a_dr] = delta_r
-        aux[a_ax] = ax
-        aux[a_ay] = ay
-
-    @numba.njit(cache=True)
-    def rk4(x, u, q, cf, cr, dt, n):  # pragma: no cover - compiled
-        k1 = np.empty(n_state)
-        k2 = np.empty(n_state)
-        k3 = np.empty(n_state)
-        k4 = np.empty(n_state)
-        xt = np.empty(n_state)
-        aux = np.empty(N_AUX)
-        half = 0.5 * dt
-        sixth = dt / 6.0
-        for step in range(n):
-            rhs(x, u, q, cf, cr, k1, aux)
-            for j in range(n_state):
-                xt[j] = x[j] + half * k1[j]
-            rhs(xt, u, q, cf, cr, k2, aux)
-            for j in range(n_state):
-                xt[j] = x[j] + half * k2[j]
-            rhs(xt, u, q, cf, cr, k3, aux)
-            for j in range(n_state):
-                xt[j] = x[j] + dt * k3[j]
-            rhs(xt, u, q, cf, cr, k4, aux)
-            ok = True
-            for j in range(n_state):
-                xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-                if not math.isfinite(xt[j]):
-                    ok = False
-            if not ok:
-                return step
-            for j in range(n_state):
-                x[j] = xt[j]
-        return n
-
-    @numba.njit(cache=True)
-    def euler(x, u, q, cf, cr, dt, n):  # pragma: no cover - compiled
-        k1 = np.empty(n_state)
-        xt = np.empty(n_state)
-        aux = np.empty(N_AUX)
-        for step in range(n):
-            rhs(x, u, q, cf, cr, k1, aux)
-            ok = True
-            for j in range(n_state):
-                xt[j] = x[j] + dt * k1[j]
-                if not math.isfinite(xt[j]):
-                    ok = False
-            if not ok:
-                return step
-            for j in range(n_state):
-                x[j] = xt[j]
-        return n
-
-    return Kernels(rhs, rk4, euler)
 
 
 def aux_from_array(aux: np.ndarray) -> Aux:
