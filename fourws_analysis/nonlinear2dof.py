@@ -39,10 +39,10 @@ from fourws_sim.params import Vehicle
 
 _ZERO_INPUT = np.zeros(len(cubic2dof.INPUT))
 #: Relative size of the imaginary part below which a polynomial root counts as real.
-_REAL_ROOT_TOL = 1e-7
+_REAL_ROOT_TOL = 1e-6
 #: Newton polishing: iterations and step tolerance in slip angle (rad).
 _NEWTON_ITER = 50
-_NEWTON_TOL = 1e-14
+_NEWTON_TOL = 1e-13
 #: Two equilibria closer than this (m/s and rad/s) are the same point.
 _SAME_POINT = 1e-6
 #: Real parts within this of zero (1/s) make an equilibrium "marginal" (not stable).
@@ -195,8 +195,11 @@ def _slips_to_state(alpha_f: float, alpha_r: float, p: cubic2dof.Params) -> np.n
 
 def _newton(x: np.ndarray, p: cubic2dof.Params) -> np.ndarray:
     for _ in range(_NEWTON_ITER):
-        step = np.linalg.solve(cubic2dof.jacobian(x, _ZERO_INPUT, p),
-                               cubic2dof.derivatives(0.0, x, _ZERO_INPUT, p))
+        try:
+            step = np.linalg.solve(cubic2dof.jacobian(x, _ZERO_INPUT, p),
+                                   cubic2dof.derivatives(0.0, x, _ZERO_INPUT, p))
+        except np.linalg.LinAlgError:  # a double root (bifurcation): keep the root as found
+            break
         x = x - step
         if np.max(np.abs(step)) < _NEWTON_TOL * max(1.0, np.max(np.abs(x))):
             break
@@ -233,6 +236,9 @@ def equilibria_of(p: cubic2dof.Params) -> tuple[Equilibrium, ...]:
         x = _newton(_slips_to_state(af, float(alpha_r(af)), p), p)
         if not np.all(np.isfinite(x)):
             raise NonFiniteError(f"equilibrium search diverged near alpha_f = {af!r} rad")
+        residual_scale = p.speed_mps * max(1.0, float(np.max(np.abs(x))))
+        if np.max(np.abs(cubic2dof.derivatives(0.0, x, _ZERO_INPUT, p))) > 1e-8 * residual_scale:
+            continue  # a nearly real complex root that is no real equilibrium
         if all(np.max(np.abs(x - y)) > _SAME_POINT for y in found):
             found.append(x)
     found.sort(key=lambda x: (round(x[0], 9), x[1]))

@@ -199,3 +199,20 @@ def test_cli_bad_speed_exit_code(capsys, speed):
 def test_cli_vehicle_without_cubic_tire(capsys):
     assert main(["equilibria", "--vehicle", "table_4_1_set_1", "--speed-mps", "20"]) == 2
     assert "tire: missing" in capsys.readouterr().err
+
+
+def test_nine_real_equilibria_at_low_speed_form_the_phase_polygon():
+    # "A total of nine equilibrium points should exist because Equations (7.7) and (7.8) are
+    # both cubic" (Bezout: 3 x 3). At 5 m/s all nine are real; the region of attraction is the
+    # phase polygon through the eight unstable ones (Genesio et al., section 7.5)
+    region = nl.stability_region(load_vehicle(SET1), 5.0)
+    eqs = region.equilibria
+    assert len(eqs) == 9
+    assert [e.stable for e in eqs].count(True) == 1
+    assert sum(e.kind == "saddle" for e in eqs) == 4
+    polygon = region.reversal.polygon
+    assert polygon is not None
+    for e in eqs:
+        if not e.stable:
+            assert np.min(np.linalg.norm(polygon - e.state, axis=1)) < 1e-9
+    assert region.reversal.contains(np.zeros((1, 2)))[0]

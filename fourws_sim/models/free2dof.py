@@ -27,7 +27,6 @@ from enum import IntEnum
 import numpy as np
 
 from fourws_sim.errors import ParameterError
-from fourws_sim.models import check_speed
 from fourws_sim.models import linear2dof
 from fourws_sim.params import Vehicle
 
