@@ -1,15 +1,15 @@
 """Pacejka Magic Formula tire (MF 5.2 steady state, zero camber) with combined slip.
 
 Equations: H. B. Pacejka, *Tire and Vehicle Dynamics*, 3rd ed., Butterworth-Heinemann, 2012,
-section 4.3.2 (the MF-Tyre 5.2 equations: pure slip 4.E1-4.E30, combined slip with the
-cosine weighting functions 4.E50-4.E78, aligning moment with the equivalent slip angle).
+chapter 4, the full set of Magic Formula (MF-Tyre 5.2) steady-state equations: pure slip,
+combined slip with the cosine weighting functions, aligning moment with equivalent slip angles.
 Default coefficients: the same book, Appendix 3, Table A3.1, the passenger-car tire
-205/60R15 91V at 2.2 bar (nominal load ``FNOMIN = 4000 N``, unloaded radius ``R0 = 0.3135 m``),
-(transcribed by hand from the printed table), given there in the book's sign convention in which the lateral coefficients give
-``Fy < 0`` for ``alpha > 0`` (``PDY1 = -0.990``, ``PKY1 = -14.95``): exactly fourws's
-``Fy = -C_alpha alpha``, so the values are used as printed. Only the coefficients the
-zero-camber equations use are kept (camber terms PDY3, PEY4, PKY3, PHY3, PVY3/4, QBZ4/5,
-QDZ3/4/8/9, QEZ5, QHZ3/4 drop out at ``gamma = 0``).
+205/60R15 91V at 2.2 bar (nominal load ``FNOMIN = 4000 N``, unloaded radius ``R0 = 0.3135 m``;
+transcribed by hand from the printed table), given there in the book's sign convention in
+which the lateral coefficients give ``Fy < 0`` for ``alpha > 0`` (``PDY1 = -0.990``,
+``PKY1 = -14.95``): exactly fourws's ``Fy = -C_alpha alpha``, so the values are used as
+printed. Only the coefficients the zero-camber equations use are kept (camber terms PDY3,
+PEY4, PKY3, PHY3, PVY3/4, QBZ4/5, QDZ3/4/8/9, QEZ5, QHZ3/4 drop out at ``gamma = 0``).
 
 With ``dfz = (Fz - FNOMIN)/FNOMIN`` and ``mu`` the friction scale (``lambda_mu``):
 

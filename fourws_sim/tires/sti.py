@@ -48,9 +48,9 @@ Choices where the paper is silent or unreadable (an expert's choice, reason give
   function has no memory, so ``forces`` evaluates the model twice: once at ``a_p = a_p0``, then
   with the ``Fx`` of that pass (one fixed-point step; ``KA = 0.05`` changes ``a_p`` by < 5 %).
 * ``KMU`` (C.12) has no row in Table C.1. fourws uses 0.124, the value the public
-  implementation above uses with this model for a passenger-car tire; it puts the locked-wheel friction
-  12.4 % below the peak (dry asphalt: 0.8-0.9 of peak) and gives Figure C.1 its shape
-  (peak 0.81 at 13 deg, the figure's y axis reaches 0.8).
+  implementation above uses with this model for a passenger-car tire; it puts the
+  locked-wheel friction 12.4 % below the peak (dry asphalt: 0.8-0.9 of peak) and gives
+  Figure C.1 its shape (peak 0.81 at 13 deg, the figure's y axis reaches 0.8).
 * ``B1, B3, B4``: (C.6) is a sum of three terms of which only the constant ``B3 = 0.85``
   survives with Table C.1 (``B1 = B4 = 0``), so their order does not change any result.
 * ``SNT`` (test skid number, 85) enters as ``mu_road = SN / SNT``: the ``mu`` argument of
