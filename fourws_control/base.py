@@ -36,6 +36,7 @@ from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
+from fourws_control._vehicle import bicycle
 from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
 from fourws_sim.params import Vehicle
 
@@ -160,6 +161,8 @@ class Law(ABC):
             raise ParameterError("belief_vehicle",
                                  f"must be a fourws Vehicle, got {type(belief_vehicle).__name__}")
         self.vehicle = belief_vehicle
+        #: 2-DOF parameters of the belief vehicle, extracted once (laws run at 100 Hz)
+        self.bicycle = bicycle(belief_vehicle)
         self.min_speed_mps = check_option("min_speed_mps", min_speed_mps)
 
     @abstractmethod

@@ -32,7 +32,6 @@ import math
 
 import numpy as np
 
-from fourws_control._vehicle import bicycle
 from fourws_control.base import DEFAULT_MIN_SPEED_MPS, Law, Signal
 from fourws_sim.errors import ParameterError
 from fourws_sim.params import Vehicle
@@ -83,7 +82,7 @@ class FfZeroSideslipLaw(Law):
             self.signals = (Signal.DELTA_F, Signal.YAW_RATE)
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        p = bicycle(self.vehicle)
+        p = self.bicycle
         k = np.zeros(len(Signal))
         if self.ksf is None:
             k[Signal.DELTA_F] = zero_sideslip_ratio(p.m, p.a, p.b, p.cf, p.cr, speed_mps)

@@ -88,17 +88,23 @@ def roll_compliance(vehicle: Vehicle) -> float:
     return msh / net
 
 
-def zero_sideslip_gains_3dof(vehicle: Vehicle, speed_mps: float) -> tuple[float, float]:
-    """(Ksf1 in rad/rad, Kr1 in s/m, applied as Kr1 U r) of RWC 1 and RWC 2 at ``speed_mps``."""
+def _coefficients(vehicle: Vehicle) -> tuple[float, float, float, float]:
+    """(a, b, front, rear): delta_f = r (a/U + front U), delta_r = r (-b/U + rear U) at V = 0."""
     p = bicycle(vehicle)
     pr = roll_compliance(vehicle)
     ef, er = vehicle.roll.roll_steer_front, vehicle.roll.roll_steer_rear
+    return p.a, p.b, p.m * p.b / (p.L * p.cf) - ef * pr, p.m * p.a / (p.L * p.cr) - er * pr
+
+
+def _gains(coef: tuple[float, float, float, float], speed_mps: float) -> tuple[float, float]:
+    a, b, front, rear = coef
     u2 = speed_mps * speed_mps
-    rear = p.m * p.a / (p.L * p.cr) - er * pr  # coefficient of U^2 in delta_r / (r/U)
-    front = p.m * p.b / (p.L * p.cf) - ef * pr
-    ksf1 = (-p.b + rear * u2) / (p.a + front * u2)
-    kr1 = rear - p.b / u2
-    return ksf1, kr1
+    return (-b + rear * u2) / (a + front * u2), rear - b / u2
+
+
+def zero_sideslip_gains_3dof(vehicle: Vehicle, speed_mps: float) -> tuple[float, float]:
+    """(Ksf1 in rad/rad, Kr1 in s/m, applied as Kr1 U r) of RWC 1 and RWC 2 at ``speed_mps``."""
+    return _gains(_coefficients(vehicle), speed_mps)
 
 
 def sign_change_speed_mps(vehicle: Vehicle) -> float:
@@ -117,11 +123,11 @@ class Rwc1Law(Law):
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)
-        roll_compliance(belief_vehicle)  # fail at construction, not at 100 Hz
+        self._coef = _coefficients(belief_vehicle)  # fails here, not at 100 Hz
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
         k = np.zeros(len(Signal))
-        k[Signal.DELTA_F] = zero_sideslip_gains_3dof(self.vehicle, speed_mps)[0]
+        k[Signal.DELTA_F] = _gains(self._coef, speed_mps)[0]
         return k
 
 
@@ -134,11 +140,11 @@ class Rwc2Law(Law):
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)
-        roll_compliance(belief_vehicle)
+        self._coef = _coefficients(belief_vehicle)
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
         k = np.zeros(len(Signal))
-        k[Signal.YAW_RATE] = zero_sideslip_gains_3dof(self.vehicle, speed_mps)[1] * speed_mps
+        k[Signal.YAW_RATE] = _gains(self._coef, speed_mps)[1] * speed_mps
         return k
 
 

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from fourws_control._vehicle import bicycle
 from fourws_control.base import Law, Signal
 
 
@@ -31,7 +30,7 @@ class Sol1Law(Law):
     signals = (Signal.DELTA_F, Signal.YAW_RATE)
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        p = bicycle(self.vehicle)
+        p = self.bicycle
         u = speed_mps
         k = np.zeros(len(Signal))
         k[Signal.DELTA_F] = -p.cf / p.cr

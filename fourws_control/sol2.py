@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from fourws_control._vehicle import bicycle
 from fourws_control.base import Law, Signal
 
 
@@ -29,7 +28,7 @@ class Sol2Law(Law):
     signals = (Signal.DELTA_F, Signal.YAW_RATE)
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        p = bicycle(self.vehicle)
+        p = self.bicycle
         k = np.zeros(len(Signal))
         k[Signal.DELTA_F] = p.a * p.cf / (p.b * p.cr)
         k[Signal.YAW_RATE] = -(p.a * p.a * p.cf + p.b * p.b * p.cr) / (p.b * p.cr * speed_mps)
