@@ -101,12 +101,16 @@ class LyapunovEstimate:
         (a symmetric pair).
     multiplier : float
         Lagrange multiplier lambda of ``L = V1 + lambda dV1/dt`` at the tangency points.
+    vdot_zero_curve : numpy.ndarray
+        Points ``(k, 2)`` of the curve ``dV1/dt = 0`` (x != 0) around the origin, NaN in the
+        directions where it does not exist (the curve of Figures 7.2/7.3).
     """
 
     P: np.ndarray
     level: float
     tangency_points: tuple[np.ndarray, ...]
     multiplier: float
+    vdot_zero_curve: np.ndarray
 
     def ellipse(self, n: int = 361) -> np.ndarray:
         """Points ``(n, 2)`` of the boundary ``x^T P x = C`` (V in m/s, r in rad/s)."""
@@ -320,7 +324,14 @@ def lyapunov_estimate(vehicle: Vehicle, speed_mps: float, *,
     grad_vdot = np.array([(_vdot(x + h * d, P, p) - _vdot(x - h * d, P, p)) / (2.0 * h)
                           for d in np.eye(2)])
     multiplier = -float(grad_v @ grad_vdot) / float(grad_vdot @ grad_vdot)
-    return LyapunovEstimate(P, level, (x, -x), multiplier)
+    around = np.linspace(0.0, 2.0 * np.pi, 721)
+    curve = np.full((around.size, 2), np.nan)
+    for j, t in enumerate(around):
+        e = np.array([np.cos(t), np.sin(t)])
+        q4 = 2.0 * e @ P @ _cubic_part(e, p)
+        if q4 > 0.0:
+            curve[j] = e / np.sqrt(q4)
+    return LyapunovEstimate(P, level, (x, -x), multiplier, curve)
 
 
 def trajectory_reversal(vehicle: Vehicle, speed_mps: float, *, offset: float = 1e-5,
@@ -451,7 +462,7 @@ def plot_stability_region(region: StabilityRegion, path: str | Path) -> Path:
     """Draw the stability region (V horizontal in m/s, r vertical in rad/s) to a PNG file.
 
     Shows the trajectory-reversal boundary, the Lyapunov/tangency ellipse with its tangency
-    points, and the equilibria (filled = stable). Returns the written path.
+    points, the curve dV1/dt = 0, and the equilibria (filled = stable). Returns the written path.
     """
     import matplotlib
     matplotlib.use("Agg")
@@ -465,6 +476,8 @@ def plot_stability_region(region: StabilityRegion, path: str | Path) -> Path:
     ell = region.lyapunov.ellipse()
     ax.plot(ell[:, 0], ell[:, 1], color="C1", linestyle="--",
             label=f"Lyapunov estimate (C = {region.lyapunov.level:.3g})")
+    vz = region.lyapunov.vdot_zero_curve
+    ax.plot(vz[:, 0], vz[:, 1], color="C2", linestyle=":", label="dV1/dt = 0")
     tp = np.array(region.lyapunov.tangency_points)
     ax.plot(tp[:, 0], tp[:, 1], "x", color="C1", label="tangency points")
     for eq in region.equilibria:

@@ -133,6 +133,10 @@ def test_lyapunov_estimate_is_a_valid_and_conservative_region(region1):
     for x in lyap.tangency_points:
         vdot = 2.0 * x @ lyap.P @ cubic2dof.derivatives(0.0, x, np.zeros(2), p)
         assert abs(vdot) < 1e-6 * lyap.level
+    # the tangency points lie on the dV1/dt = 0 curve, and that curve is nowhere inside V1 < C
+    curve = lyap.vdot_zero_curve[np.all(np.isfinite(lyap.vdot_zero_curve), axis=1)]
+    assert len(curve) > 100
+    assert np.min(np.einsum("ij,jk,ik->i", curve, lyap.P, curve)) >= lyap.level * (1 - 1e-6)
     # "the estimates provided by Lyapunov and tangency method were conservative"
     assert np.all(region1.reversal.contains(lyap.ellipse(181)))
 
