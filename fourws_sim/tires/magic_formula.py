@@ -4,8 +4,11 @@ Equations: H. B. Pacejka, *Tire and Vehicle Dynamics*, 3rd ed., Butterworth-Hein
 chapter 4, the full set of Magic Formula (MF-Tyre 5.2) steady-state equations: pure slip,
 combined slip with the cosine weighting functions, aligning moment with equivalent slip angles.
 Default coefficients: the same book, Appendix 3, Table A3.1, the passenger-car tire
-205/60R15 91V at 2.2 bar (nominal load ``FNOMIN = 4000 N``, unloaded radius ``R0 = 0.3135 m``;
-transcribed by hand from the printed table), given there in the book's sign convention in
+205/60R15 91V at 2.2 bar (nominal load ``FNOMIN = 4000 N``, unloaded radius ``R0 = 0.3135 m``).
+Caution: the values were entered from that table without a copy of the book at hand to check
+them against, so treat them as a representative passenger-car set (their derived properties,
+peak mu_y 0.99 and 46 kN/rad cornering stiffness at FNOMIN, are typical of such a tire), not
+as a verified reproduction of the book; they are given there in the book's sign convention in
 which the lateral coefficients give ``Fy < 0`` for ``alpha > 0`` (``PDY1 = -0.990``,
 ``PKY1 = -14.95``): exactly fourws's ``Fy = -C_alpha alpha``, so the values are used as
 printed. Only the coefficients the zero-camber equations use are kept (camber terms PDY3,
