@@ -271,6 +271,19 @@ def test_3dof_rear_roll_understeer_lowers_yaw_gain():
     assert gains[1] < gains[0]
 
 
+@pytest.mark.parametrize("factor,stable", [(0.98, False), (1.02, True)])
+def test_3dof_roll_stability_condition_eq_6_63(factor, stable):
+    # eq. 6.63: the rolling mode is unstable if k_phi < ms g h (gravity beats the springs)
+    v = load_vehicle("table_4_1_set_1")
+    rl = v.roll
+    k = factor * rl.sprung_mass_kg * GRAVITY_MPS2 * rl.roll_arm_m
+    soft = dataclasses.replace(v, roll=dataclasses.replace(
+        rl, roll_stiffness_front_nm_per_rad=k / 2.0, roll_stiffness_rear_nm_per_rad=k / 2.0,
+        roll_steer_front=0.0, roll_steer_rear=0.0))
+    max_re = np.linalg.eigvals(get_model("3dof").matrices(soft, 10.0)[0]).real.max()
+    assert (max_re < 0.0) == stable
+
+
 def test_3dof_mass_matrix_determinant_eq_6_55():
     # b4 = Ix m Iz - ms^2 h^2 Iz - Ixz^2 m (eq. 6.55) is the determinant of the inertia
     # coupling of the V, r, phi equations
