@@ -26,7 +26,9 @@ same order*. The sequence, with ``Tc`` the control period, ``dt`` the integratio
    (every value a Python float taken from the dicts/messages), then applies the actuator,
    ``delta_r_k = actuator.apply(c_k, Tc)``.
 5. The simulator integrates ``sim.step(u_k, n_steps=n)`` with
-   ``u_k = input_vector(model, d_k, delta_r_k)`` held over the ``n`` steps, then goes to 1.
+   ``u_k = simulator_inputs(d_k, delta_r_k)`` (a :class:`fourws_sim.simulator.Inputs`: front
+   angle, rear angle, steering torque, drive and brake torques of ``d_k``) held over the ``n``
+   steps, then goes to 1.
 
 There is no other state: ROS nodes that keep one maneuver, one law and one actuator instance
 per run and call them in this order on the same values reproduce this runner bit for bit
@@ -46,53 +48,24 @@ from typing import Any, Mapping
 import numpy as np
 
 from fourws_sim.drivers import DriverCommand, N_WHEELS
-from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
+from fourws_sim.errors import NonFiniteError, ParameterError
 from fourws_sim.maneuvers import Maneuver, ManeuverSpec, make_maneuver
 from fourws_sim.params import Vehicle
 
-_WHEEL_SUFFIXES = ("FL", "FR", "RL", "RR")
 #: Relative tolerance for "control period is a whole multiple of the integration step".
 _MULTIPLE_RTOL = 1e-9
 
 
-def input_vector(model_inputs: Any, command: DriverCommand, rear_angle_rad: float
-                 ) -> np.ndarray:
-    """Build a model's input vector from a driver command and the rear road-wheel angle.
+def simulator_inputs(command: DriverCommand, rear_angle_rad: float) -> Any:
+    """The :class:`fourws_sim.simulator.Inputs` of a driver command and a rear road-wheel
+    angle (rad, after the actuator); the simulator maps them to its model's input order."""
+    from fourws_sim.simulator import Inputs
 
-    Parameters
-    ----------
-    model_inputs : IntEnum class
-        The model's ``INPUT`` enum. Members are matched by name: ``DELTA_F`` (front road-wheel
-        angle, rad), ``DELTA_R`` (rear road-wheel angle, rad), ``T_F`` (driver steering torque,
-        N m), and per-wheel drive/brake torques whose names contain ``DRIVE`` or ``BRAKE`` and
-        end in the wheel ``FL``/``FR``/``RL``/``RR`` (N m).
-    command : DriverCommand
-        The driver's command.
-    rear_angle_rad : float
-        Rear road-wheel angle after the actuator, rad.
-
-    Raises
-    ------
-    IncompatibleError
-        A model input this mapping does not know.
-    """
-    u = np.zeros(len(model_inputs))
-    for member in model_inputs:
-        name = member.name.upper()
-        if name == "DELTA_F":
-            u[member] = command.front_wheel_angle_rad
-        elif name == "DELTA_R":
-            u[member] = rear_angle_rad
-        elif name in ("T_F", "STEERING_TORQUE"):
-            u[member] = command.steering_torque_nm
-        elif ("DRIVE" in name or "BRAKE" in name) and name[-2:] in _WHEEL_SUFFIXES:
-            wheel = _WHEEL_SUFFIXES.index(name[-2:])
-            torques = command.drive_torque_nm if "DRIVE" in name else command.brake_torque_nm
-            u[member] = torques[wheel]
-        else:
-            raise IncompatibleError(f"closed loop: model input {member.name!r} has no source "
-                                    "in the driver command")
-    return u
+    return Inputs(front_wheel_angle_rad=command.front_wheel_angle_rad,
+                  rear_wheel_angle_rad=rear_angle_rad,
+                  steering_torque_nm=command.steering_torque_nm,
+                  drive_torque_nm=command.drive_torque_nm,
+                  brake_torque_nm=command.brake_torque_nm)
 
 
 @dataclass
@@ -175,7 +148,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
                     law_name: str, model: str = "8dof", dt_s: float = 1e-3,
                     control_period_s: float = 0.01, belief_vehicle: Vehicle | None = None,
                     integrator: str = "rk4", law_options: Mapping[str, Any] | None = None,
-                    max_ticks: int | None = None) -> ClosedLoopResult:
+                    tire: str | None = None, max_ticks: int | None = None) -> ClosedLoopResult:
     """Run ``maneuver`` with rear-steer law ``law_name`` on ``vehicle`` (no ROS).
 
     Parameters
@@ -198,6 +171,8 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         Integrator name (``rk4``).
     law_options : mapping, optional
         Options passed to ``make_law``.
+    tire : str, optional
+        Tire model overriding the vehicle's (8-DOF only).
     max_ticks : int, optional
         Stop after this many ticks (a guard for maneuvers that end on a condition).
 
@@ -215,7 +190,6 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         The simulation diverged (raised by the simulator or the law).
     """
     from fourws_control import RearSteerActuator, make_law
-    from fourws_sim.models import get_model
     from fourws_sim.simulator import Simulator
 
     for key, value in (("dt_s", dt_s), ("control_period_s", control_period_s)):
@@ -230,9 +204,8 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     belief = vehicle if belief_vehicle is None else belief_vehicle
     man = maneuver if isinstance(maneuver, Maneuver) else make_maneuver(maneuver, vehicle)
 
-    sim = Simulator(vehicle, model=model, integrator=integrator, dt_s=dt_s)
+    sim = Simulator(vehicle, model=model, integrator=integrator, dt_s=dt_s, tire=tire)
     sim.reset(speed_mps=man.initial_speed_mps)
-    model_inputs = get_model(model).INPUT
     law = make_law(law_name, belief, **dict(law_options or {}))
     actuator = RearSteerActuator(belief)
 
@@ -261,7 +234,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         law_cmds.append(c)
         rear.append(delta_r)
         phases.append(man.phase(t))
-        sim.step(input_vector(model_inputs, d, delta_r), n_steps=n_sub)
+        sim.step(simulator_inputs(d, delta_r), n_steps=n_sub)
         y = sim.outputs()
     else:
         end_reason = "max_ticks"
@@ -282,7 +255,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         raise NonFiniteError(f"closed loop {law_name}/{man.name}: non-finite output")
     config = {
         "vehicle": vehicle.to_dict(), "belief_vehicle": belief.name, "maneuver": man.to_dict(),
-        "law": law_name, "law_options": dict(law_options or {}), "model": model,
+        "law": law_name, "law_options": dict(law_options or {}), "model": model, "tire": tire,
         "integrator": integrator, "integration_step_s": dt_s,
         "control_period_s": control_period_s,
     }
@@ -293,4 +266,4 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         maneuver=man.name, end_reason=end_reason, config=config)
 
 
-__all__ = ["ClosedLoopResult", "input_vector", "law_input_from", "run_closed_loop"]
+__all__ = ["ClosedLoopResult", "law_input_from", "run_closed_loop", "simulator_inputs"]

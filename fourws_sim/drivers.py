@@ -97,17 +97,18 @@ class DriverCommand:
 class SpeedHoldSpec:
     """Gains and torque routing of the speed-hold driver (YAML key ``speed_hold``).
 
-    Defaults: ``kp = 2 /s`` gives a 0.5 s time constant of the speed loop, fast against the
-    seconds-long maneuvers yet slow against the tire/wheel-spin dynamics; ``ki = 1 /s^2`` puts
-    the PI zero at 0.5 rad/s so the integral removes the cornering drag within a few seconds.
+    Defaults: ``kp = 4 /s``, ``ki = 2 /s^2``: the speed loop ``s^2 + kp s + ki`` has real
+    poles at -0.59 and -3.41 rad/s (no overshoot), fast against the seconds-long maneuvers yet
+    slow against the tire/wheel-spin dynamics; on table_8_1 they hold 85 km/h within 0.5 %
+    through the 0.63 g step steer (kp = 2 /s, ki = 1 /s^2 gave 0.86 %).
     ``driven_axle = rear`` keeps the steered front tires free of drive force, closest to the
     paper's constant-speed simulations (ch. 8 holds U constant). ``brake_front_fraction`` 0.65
     is a typical passenger-car brake balance.
     """
 
     enabled: bool = True
-    kp_per_s: float = _spec("nonnegative", default=2.0, doc="accel per speed error, 1/s")
-    ki_per_s2: float = _spec("nonnegative", default=1.0, doc="accel per integrated error, 1/s^2")
+    kp_per_s: float = _spec("nonnegative", default=4.0, doc="accel per speed error, 1/s")
+    ki_per_s2: float = _spec("nonnegative", default=2.0, doc="accel per integrated error, 1/s^2")
     driven_axle: str = "rear"
     brake_front_fraction: float = _spec("fraction", default=0.65, doc="front share of braking")
     max_accel_mps2: float = _spec(default=3.0, doc="drive request limit, m/s^2")

@@ -284,7 +284,8 @@ class ConstantRadiusParams:
     speed steps from the initial speed by ``speed_step_mps`` every ``dwell_s`` up to
     ``final_speed_mps`` (quasi-steady: each step settles before the next). The run ends after
     the last dwell, or aborts when the path error exceeds ``max_path_error_m`` (the car can no
-    longer hold the circle)."""
+    longer hold the circle) or the sideslip exceeds ``max_sideslip_rad`` (the car spun; the
+    kinematic sideslip b/R of a 40 m circle is ~0.04 rad)."""
 
     radius_m: float = _spec()
     final_speed_mps: float = _spec()
@@ -292,6 +293,7 @@ class ConstantRadiusParams:
     dwell_s: float = _spec(default=8.0)
     direction: str = "left"
     max_path_error_m: float = _spec(default=5.0)
+    max_sideslip_rad: float = _spec(default=0.25)
 
     def _check(self, source: str | None, prefix: str) -> None:
         if self.direction not in ("left", "right"):
@@ -309,14 +311,16 @@ class DoubleLaneChangeParams:
     width 1.1 W + 0.25; section 2 (free) 13.5 m; section 3 x in [25.5, 36.5], width W + 1,
     its right edge 1 m left of the left edge of section 1; section 4 (free) 12.5 m; section 5
     x in [49, 61], width 1.3 W + 0.25 but at least 3 m, its right edge in line with that of
-    section 1. The reference path of the driver keeps y = 0 through section 1 up to
-    ``turn_in_x_m``, blends (raised cosine) to ``side_lane_target_m`` above the section-3 right
+    section 1. The reference path of the driver keeps y = ``entry_offset_m`` (negative: the
+    right half of the entry lane, where a test driver sets up for a left lane change) through
+    section 1 up to ``turn_in_x_m``, blends (raised cosine) to ``side_lane_target_m`` above the section-3 right
     edge by ``side_lane_reach_x_m``, holds it, blends back to the centre of section 5 from
     ``return_x_m`` to ``return_reach_x_m`` (all knots relative to x0).
     """
 
     vehicle_width_m: float = _spec(default=1.7)
     approach_m: float = _spec("nonnegative", default=30.0)
+    entry_offset_m: float = _spec("any", default=0.0)
     turn_in_x_m: float = _spec("any", default=7.0)
     side_lane_reach_x_m: float = _spec("any", default=28.0)
     side_lane_target_m: float = _spec("any", default=1.0)
@@ -344,7 +348,8 @@ class DoubleLaneChangeParams:
         x0 = self.approach_m
         xs = (0.0, x0 + self.turn_in_x_m, x0 + self.side_lane_reach_x_m, x0 + self.return_x_m,
               x0 + self.return_reach_x_m, x0 + 61.0 + 100.0)
-        ys = (0.0, 0.0, y_side, y_side, y_exit, y_exit)
+        y0 = self.entry_offset_m
+        ys = (y0, y0, y_side, y_side, y_exit, y_exit)
         return LanePath(xs, ys)
 
     def _check(self, source: str | None, prefix: str) -> None:
@@ -681,8 +686,11 @@ class Maneuver:
         elif kind == "constant_radius" and self._path_driver is not None:
             error = self._path_driver.path.lateral_error(float(outputs["x_m"]),
                                                          float(outputs["y_m"]))
+            sideslip = float(outputs.get("sideslip_rad", 0.0))
             if abs(error) > p.max_path_error_m:
                 self._aborted = f"path error {error:.2f} m exceeds max_path_error_m"
+            elif abs(sideslip) > p.max_sideslip_rad:
+                self._aborted = f"sideslip {sideslip:.2f} rad exceeds max_sideslip_rad (spun)"
         return bool(self._aborted)
 
     def to_dict(self) -> dict[str, Any]:

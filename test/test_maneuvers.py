@@ -212,7 +212,8 @@ def test_iso_3888_2_track() -> None:
         assert br - al == pytest.approx(1.0)
         assert cr == pytest.approx(ar)
         path = p.path()
-        assert path.y_ref(a0) == 0.0
+        assert path.y_ref(a0) == p.entry_offset_m
+        assert ar < p.entry_offset_m < al
         assert br < path.y_ref(0.5 * (b0 + b1)) < bl
         assert cr < path.y_ref(0.5 * (c0 + c1)) < cl
 
