@@ -1,0 +1,34 @@
+"""``fourws bench [--json]``: speed of the 8-DOF real-time simulator (RK4, 1 ms, one core)."""
+
+from __future__ import annotations
+
+import argparse
+
+HELP = "benchmark the 8-DOF simulator (STI tire, RK4 1 ms, one core): real-time factor"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the sub-parser."""
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--vehicle", default="table_8_1", help="vehicle name or YAML path")
+    parser.add_argument("--tire", default=None, help="tire model (default: the vehicle's)")
+    parser.add_argument("--seconds", type=float, default=20.0, metavar="S",
+                        help="simulated seconds per repetition (default 20)")
+    parser.add_argument("--repeats", type=int, default=5, help="repetitions (default 5)")
+    parser.add_argument("--no-cold", action="store_true",
+                        help="skip the empty-cache compile measurement (a subprocess)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the benchmark and print its results."""
+    from fourws_sim.bench import format_text, run_benchmark, to_json
+    from fourws_sim.errors import ParameterError
+
+    if not args.seconds > 0.0:
+        raise ParameterError("--seconds", f"must be > 0, got {args.seconds}")
+    if args.repeats < 1:
+        raise ParameterError("--repeats", f"must be >= 1, got {args.repeats}")
+    result = run_benchmark(vehicle=args.vehicle, sim_seconds=args.seconds,
+                           repeats=args.repeats, tire=args.tire, cold=not args.no_cold)
+    print(to_json(result) if args.json else format_text(result))
+    return 0
