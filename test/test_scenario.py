@@ -1,0 +1,110 @@
+"""Scenario files: the default scenario, round trips, belief vehicles and bad input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.params import load_vehicle
+from fourws_sim.scenario import available_scenarios, load_scenario, scenario_from_mapping
+
+
+def test_default_scenario_is_the_documented_run() -> None:
+    """docs: step steer at 85 km/h on table_8_1, laws fws/sol1/rwc2_3dof, 8-DOF, lockstep,
+    1 ms integration, 10 ms control."""
+    s = load_scenario()
+    assert "default" in available_scenarios()
+    assert s.vehicle == "table_8_1"
+    assert s.maneuver.type == "step_steer"
+    assert s.maneuver.initial_speed_mps == pytest.approx(85.0 / 3.6, rel=1e-12)
+    assert s.laws == ("fws", "sol1", "rwc2_3dof")
+    assert (s.model, s.clock_mode, s.integrator) == ("8dof", "lockstep", "rk4")
+    assert s.integration_step_s == 1e-3
+    assert s.control_period_s == 1e-2
+    assert s.control_steps == 10
+    assert s.recording.enabled and s.recording.topics == "all"
+
+
+def test_round_trip_and_inline_maneuver(tmp_path: Path) -> None:
+    s = load_scenario("default")
+    data = s.to_dict()
+    assert isinstance(data["maneuver"], dict)  # recorded inline, self-contained
+    again = scenario_from_mapping(data)
+    assert again.to_dict() == data
+    path = tmp_path / "mine.yaml"
+    path.write_text(yaml.safe_dump(data))
+    assert load_scenario(path).to_dict() == dict(data)
+
+
+def test_belief_scaling_and_tire_override() -> None:
+    data = load_scenario().to_dict()
+    data["belief"] = {"cornering_stiffness_scale_front": 0.6,
+                      "cornering_stiffness_scale_rear": 0.6}
+    data["tire"] = "linear"
+    s = scenario_from_mapping(data)
+    car = s.build_vehicle()
+    assert car.tire.model == "linear"
+    belief = s.build_belief(car)
+    base = load_vehicle("table_8_1").axle_tires
+    assert belief.axle_tires.cornering_stiffness_front_n_per_rad == pytest.approx(
+        0.6 * base.cornering_stiffness_front_n_per_rad, rel=1e-12)
+    assert belief.axle_tires.cornering_stiffness_rear_n_per_rad == pytest.approx(
+        0.6 * base.cornering_stiffness_rear_n_per_rad, rel=1e-12)
+    other = scenario_from_mapping(dict(load_scenario().to_dict(),
+                                       belief={"vehicle": "table_5_1"}))
+    assert other.build_belief(car).name == "table_5_1"
+    assert load_scenario().build_belief(car) is car
+
+
+@pytest.mark.parametrize("change,field", [
+    ({"clock_mode": "fast"}, "clock_mode"),
+    ({"control_period_s": 0.0105}, "control_period_s"),
+    ({"state_period_s": -1.0}, "state_period_s"),
+    ({"laws": []}, "laws"),
+    ({"colour": "red"}, "colour"),
+    ({"belief": {"scale": 2.0}}, "belief.scale"),
+    ({"recording": {"topics": ["no_slash"]}}, "recording.topics"),
+    ({"law_options": {"lqr": {}}}, "law_options.lqr"),
+])
+def test_malformed_scenario_names_field_and_file(tmp_path: Path, change: dict,
+                                                 field: str) -> None:
+    data = load_scenario().to_dict()
+    data.update(change)
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ParameterError) as err:
+        load_scenario(path)
+    assert err.value.field == field
+    assert str(path) in str(err.value)
+
+
+@pytest.mark.parametrize("change,kind", [
+    ({"laws": ["fws", "magic"]}, "law"),
+    ({"model": "9dof"}, "model"),
+    ({"tire": "slick"}, "tire"),
+    ({"maneuver": "moose_test"}, "maneuver"),
+    ({"vehicle": "batmobile"}, "vehicle"),
+])
+def test_unknown_names_list_the_valid_ones(change: dict, kind: str) -> None:
+    data = dict(load_scenario().to_dict(), **change)
+    with pytest.raises(UnknownNameError) as err:
+        scenario_from_mapping(data)
+    assert err.value.kind == kind
+    assert len(err.value.valid) > 0
+
+
+def test_bad_inline_maneuver_names_the_scenario() -> None:
+    data = load_scenario().to_dict()
+    data["maneuver"] = dict(data["maneuver"], ramp_time_s=-1.0)
+    with pytest.raises(ParameterError) as err:
+        scenario_from_mapping(data, "my_scenario.yaml")
+    assert err.value.field == "ramp_time_s"
+    assert "my_scenario.yaml" in str(err.value)
+
+
+def test_unknown_scenario_name() -> None:
+    with pytest.raises(UnknownNameError, match="default"):
+        load_scenario("no_such_scenario")
