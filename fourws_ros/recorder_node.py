@@ -39,7 +39,10 @@ from fourws_ros import topics
 from fourws_sim.errors import ParameterError
 
 #: Topics recorded by default: the whole graph (``/clock`` duplicates the state stamps).
-DEFAULT_TOPICS = [t for t in topics.TOPIC_TYPES if t != topics.CLOCK]
+DEFAULT_TOPICS = [t for t in topics.TOPIC_TYPES
+                  if t not in (topics.CLOCK, topics.RECORDER_PROGRESS)]
+#: The recorder reports its progress (for lockstep flow control) every this many states.
+PROGRESS_EVERY = 20
 
 _NS_PER_S = 1_000_000_000
 #: Upper bound of the shutdown drain, s (a publisher that never stops cannot hold us forever).
@@ -134,6 +137,10 @@ class RecorderNode(Node):
         self.counts: dict[str, int] = {t: 0 for t in wanted}
         self._last_stamp_ns = 0
         self._last_rx = time.monotonic()
+        self._progress_pub = self.create_publisher(
+            topics.message_class(topics.RECORDER_PROGRESS), topics.RECORDER_PROGRESS,
+            topics.STATUS_QOS)
+        self._progress_msg = topics.message_class(topics.RECORDER_PROGRESS)()
         self._subs = [
             self.create_subscription(topics.message_class(t), t, self._make_callback(t),
                                      topics.TOPIC_QOS[t], raw=True)
@@ -170,6 +177,9 @@ class RecorderNode(Node):
             write(topic, data, t_ns, msgtype)
             counts[topic] += 1
             self._last_rx = time.monotonic()
+            if topic == topics.STATE and counts[topic] % PROGRESS_EVERY == 0:
+                self._progress_msg.data = counts[topic]
+                self._progress_pub.publish(self._progress_msg)
 
         return callback
 

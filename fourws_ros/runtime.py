@@ -42,12 +42,16 @@ class _StopFlag:
 def make_executor(context: Any = None) -> Any:
     """The executor the nodes use: rclpy's C++ events executor when present (lower overhead per
     callback, which bounds the lockstep rate), else the single-threaded executor."""
-    try:
-        from rclpy.experimental import EventsExecutor
-        return EventsExecutor(context=context)
-    except ImportError:
-        from rclpy.executors import SingleThreadedExecutor
-        return SingleThreadedExecutor(context=context)
+    import os
+
+    if os.environ.get("FOURWS_EXECUTOR", "events") == "events":
+        try:
+            from rclpy.experimental import EventsExecutor
+            return EventsExecutor(context=context)
+        except ImportError:
+            pass
+    from rclpy.executors import SingleThreadedExecutor
+    return SingleThreadedExecutor(context=context)
 
 
 def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,

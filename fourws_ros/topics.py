@@ -33,6 +33,9 @@ ODOM = f"{NAMESPACE}/odom"
 IMU = f"{NAMESPACE}/imu"
 RUN_CONFIG = f"{NAMESPACE}/run_config"
 CLOCK = "/clock"
+#: Recorder -> simulator flow control in lockstep (``std_msgs/UInt64``: number of
+#: ``/fourws/state`` messages written so far). Not recorded.
+RECORDER_PROGRESS = f"{NAMESPACE}/recorder_progress"
 
 #: Services of the simulator (``std_srvs/srv/Trigger`` and ``std_srvs/srv/SetBool``).
 SRV_RESET = f"{NAMESPACE}/reset"
@@ -49,6 +52,7 @@ TOPIC_TYPES: dict[str, str] = {
     IMU: "sensor_msgs/msg/Imu",
     RUN_CONFIG: "std_msgs/msg/String",
     CLOCK: "rosgraph_msgs/msg/Clock",
+    RECORDER_PROGRESS: "std_msgs/msg/UInt64",
 }
 
 #: Frames (REP-105): earth-fixed ``odom``, body ``base_link`` (x forward, y left, z up).
@@ -82,6 +86,7 @@ TOPIC_QOS: dict[str, QoSProfile] = {
     IMU: STREAM_QOS,
     RUN_CONFIG: LATCHED_QOS,
     CLOCK: CLOCK_QOS,
+    RECORDER_PROGRESS: STATUS_QOS,
 }
 
 

@@ -1,0 +1,225 @@
+"""Controller node: any rear-steer law of :mod:`fourws_control`, answering each vehicle state.
+
+For every ``VehicleState`` it publishes one ``RearSteerCommand`` (``state_step`` = the state's
+step): the law's rear angle for the state and the driver's front road-wheel angle of the same
+tick, passed through the rear-steer actuator (angle and rate limits over one control period).
+
+Handshake (both clock modes): the command for state ``k`` is sent once both the state ``k``
+and the ``DriverInput`` stamped with the state's stamp have arrived — the law's feed-forward
+term uses the front angle the driver applies in this tick, as the offline runner
+(:func:`fourws_sim.closed_loop.run_closed_loop`) does. If no driver input of that tick arrives
+within ``driver_wait_s`` (wall clock), the latest driver input is used (realtime runs with a
+slow maneuver node) and the fallback is counted in the log.
+
+Parameters (ROS, all validated; a rejected set leaves the running value)
+-------------------------------------------------------------------------
+law : str
+    Law name (``fourws_control.available_laws()``); live switchable. The actuator keeps its
+    current angle across a switch, so the rear wheels never jump.
+law_options_json : str
+    JSON mapping of the law's options (e.g. ``{"min_speed_mps": 2.0}``).
+vehicle : str
+    Simulated vehicle (name or YAML path); read-only.
+belief_vehicle : str
+    The controller's belief of the vehicle ('' = ``vehicle``); the gains come from it.
+belief_scale_front, belief_scale_rear : float
+    Scales of the belief's axle cornering stiffnesses (e.g. 0.6 for a -40 % belief).
+angle_limit_rad, rate_limit_radps : float
+    Actuator limits (0 = the vehicle file's ``actuators``).
+control_period_s : float
+    Period over which the rate limit acts, s (the simulator's control period).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from typing import Any
+
+from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetParametersResult)
+from rclpy.node import Node
+
+from fourws_ros import conversions, topics
+from fourws_sim.errors import FourwsError, ParameterError
+
+#: Longest rear-angle limit a parameter may set, rad (45 deg: beyond any rear-steer hardware).
+MAX_ANGLE_LIMIT_RAD = math.pi / 4
+#: Longest rate limit a parameter may set, rad/s.
+MAX_RATE_LIMIT_RADPS = 10.0
+
+
+def _float_range(lo: float, hi: float) -> list[FloatingPointRange]:
+    return [FloatingPointRange(from_value=lo, to_value=hi)]
+
+
+class ControllerNode(Node):
+    """Rear-steer controller (see module docstring)."""
+
+    def __init__(self, node_name: str = "fourws_controller") -> None:
+        super().__init__(node_name)
+        from fourws_control import available_laws
+
+        self.declare_parameter("law", "fws", ParameterDescriptor(
+            description=f"rear-steer law, one of: {', '.join(available_laws())}"))
+        self.declare_parameter("law_options_json", "{}", ParameterDescriptor(
+            description="JSON mapping of law options"))
+        self.declare_parameter("vehicle", "table_8_1", ParameterDescriptor(
+            description="simulated vehicle (config/vehicles name or YAML path)", read_only=True))
+        self.declare_parameter("belief_vehicle", "", ParameterDescriptor(
+            description="controller belief vehicle ('' = vehicle)"))
+        self.declare_parameter("belief_scale_front", 1.0, ParameterDescriptor(
+            description="belief front cornering stiffness scale, 1",
+            floating_point_range=_float_range(0.05, 20.0)))
+        self.declare_parameter("belief_scale_rear", 1.0, ParameterDescriptor(
+            description="belief rear cornering stiffness scale, 1",
+            floating_point_range=_float_range(0.05, 20.0)))
+        self.declare_parameter("angle_limit_rad", 0.0, ParameterDescriptor(
+            description="rear angle limit, rad (0 = vehicle actuators)",
+            floating_point_range=_float_range(0.0, MAX_ANGLE_LIMIT_RAD)))
+        self.declare_parameter("rate_limit_radps", 0.0, ParameterDescriptor(
+            description="rear angle rate limit, rad/s (0 = vehicle actuators)",
+            floating_point_range=_float_range(0.0, MAX_RATE_LIMIT_RADPS)))
+        self.declare_parameter("control_period_s", 0.01, ParameterDescriptor(
+            description="control period (rate-limit interval), s", read_only=True,
+            floating_point_range=_float_range(1e-4, 1.0)))
+        self.declare_parameter("driver_wait_s", 0.5, ParameterDescriptor(
+            description="wall time to wait for the driver input of a tick before using the "
+                        "latest, s (0 = wait forever: lockstep)",
+            floating_point_range=_float_range(0.0, 10.0)))
+
+        from fourws_sim.params import load_vehicle
+        self.vehicle = load_vehicle(str(self.get_parameter("vehicle").value))
+        self.dt_s = float(self.get_parameter("control_period_s").value)
+        current = {p: self.get_parameter(p).value for p in self._BUILD_PARAMS}
+        self.law, self.actuator = self._build(current, None)
+        self.law_name = current["law"]
+        self.add_on_set_parameters_callback(self._on_set)
+
+        self.pub = self.create_publisher(topics.message_class(topics.REAR_STEER_CMD),
+                                         topics.REAR_STEER_CMD, topics.STREAM_QOS)
+        self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
+                                 self._on_state, topics.STREAM_QOS)
+        self.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
+                                 self._on_driver, topics.STREAM_QOS)
+        self._state: Any = None
+        self._state_rx = 0.0
+        self._driver: dict[int, float] = {}  # stamp ns -> front road-wheel angle, rad
+        self._last_front = 0.0
+        self.fallbacks = 0
+        self._timer = self.create_timer(0.05, self._check_wait)
+        self.get_logger().info(f"law {self.law_name} on {self.vehicle.name}")
+
+    _BUILD_PARAMS = ("law", "law_options_json", "belief_vehicle", "belief_scale_front",
+                     "belief_scale_rear", "angle_limit_rad", "rate_limit_radps")
+
+    def _build(self, values: dict[str, Any], keep_angle: float | None) -> tuple[Any, Any]:
+        """Law and actuator from parameter values; raises FourwsError on bad values."""
+        from fourws_control import RearSteerActuator, make_law
+        from fourws_sim.params import load_vehicle
+
+        try:
+            options = json.loads(values["law_options_json"] or "{}")
+        except json.JSONDecodeError as exc:
+            raise ParameterError("law_options_json", f"not JSON ({exc})") from None
+        if not isinstance(options, dict):
+            raise ParameterError("law_options_json", "must be a JSON object")
+        belief = (load_vehicle(values["belief_vehicle"]) if values["belief_vehicle"]
+                  else self.vehicle)
+        sf, sr = float(values["belief_scale_front"]), float(values["belief_scale_rear"])
+        if sf != 1.0 or sr != 1.0:
+            belief = belief.with_axle_tires(sf, sr)
+        law = make_law(str(values["law"]), belief, **options)
+        law.gains(max(self.vehicle_speed_hint(), 1.0))  # fail now on a law that cannot design
+        limits: dict[str, float] = {}
+        if values["angle_limit_rad"] > 0.0:
+            limits["angle_limit_rad"] = float(values["angle_limit_rad"])
+        if values["rate_limit_radps"] > 0.0:
+            limits["rate_limit_rad_per_s"] = float(values["rate_limit_radps"])
+        # the actuator model's limits come from the vehicle the controller is given (its
+        # belief), as in fourws_sim.closed_loop
+        actuator = RearSteerActuator(belief, **limits,
+                                     initial_angle_rad=keep_angle or 0.0)
+        return law, actuator
+
+    def vehicle_speed_hint(self) -> float:
+        """Speed used to try a new law's gain design, m/s (the last state's, else 20)."""
+        state = getattr(self, "_state", None)
+        return float(state.speed_mps) if state is not None else 20.0
+
+    def _on_set(self, params: list[Any]) -> SetParametersResult:
+        changed = {p.name: p.value for p in params if p.name in self._BUILD_PARAMS}
+        if not changed:
+            return SetParametersResult(successful=True)
+        values = {p: self.get_parameter(p).value for p in self._BUILD_PARAMS}
+        values.update(changed)
+        try:
+            law, actuator = self._build(values, self.actuator.angle_rad)
+        except (FourwsError, TypeError) as exc:
+            self.get_logger().warning(f"rejected parameter change: {exc}")
+            return SetParametersResult(successful=False, reason=str(exc))
+        self.law, self.actuator, self.law_name = law, actuator, str(values["law"])
+        self.get_logger().info(f"now running law {self.law_name}")
+        return SetParametersResult(successful=True)
+
+    # ------------------------------------------------------------------ handshake
+    def _on_state(self, msg: Any) -> None:
+        self._state = msg
+        self._state_rx = time.monotonic()
+        self._try_answer(fallback=False)
+
+    def _on_driver(self, msg: Any) -> None:
+        try:
+            cmd = conversions.driver_command(msg)
+        except FourwsError as exc:
+            self.get_logger().error(f"ignored driver input: {exc}")
+            return
+        key = conversions.stamp_to_ns(msg.header.stamp)
+        self._driver[key] = cmd.front_wheel_angle_rad
+        self._last_front = cmd.front_wheel_angle_rad
+        if len(self._driver) > topics.STREAM_DEPTH:
+            self._driver.pop(next(iter(self._driver)))
+        self._try_answer(fallback=False)
+
+    def _check_wait(self) -> None:
+        wait = float(self.get_parameter("driver_wait_s").value)
+        if wait > 0.0 and self._state is not None and time.monotonic() - self._state_rx > wait:
+            self._try_answer(fallback=True)
+
+    def _try_answer(self, fallback: bool) -> None:
+        state = self._state
+        if state is None:
+            return
+        key = conversions.stamp_to_ns(state.header.stamp)
+        front = self._driver.pop(key, None)
+        if front is None:
+            if not fallback:
+                return
+            front = self._last_front
+            self.fallbacks += 1
+            self.get_logger().warning(
+                f"no driver input for state step {state.step}; used the latest "
+                f"({self.fallbacks} fallbacks)", throttle_duration_sec=1.0)
+        # drop driver inputs older than this tick
+        for old in [k for k in self._driver if k < key]:
+            del self._driver[old]
+        self._state = None
+        try:
+            raw = self.law.rear_angle(conversions.law_input(state, front))
+            angle = self.actuator.apply(raw, self.dt_s)
+            self.pub.publish(conversions.rear_cmd_msg(angle, 0.0, self.law_name, state))
+        except FourwsError as exc:
+            # never publish a non-finite command: the simulator times out to zero rear steer
+            self.get_logger().error(f"no command for step {state.step}: {exc}",
+                                    throttle_duration_sec=1.0)
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point ``controller``."""
+    from fourws_ros.runtime import run_node
+    return run_node(ControllerNode, args, name="fourws_controller")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

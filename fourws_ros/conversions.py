@@ -1,0 +1,267 @@
+"""The one place that converts ROS messages <-> fourws core structures.
+
+Core side: ``Simulator.outputs()`` mappings (keys = the fields of ``VehicleState.msg``),
+:class:`fourws_sim.drivers.DriverCommand`, :class:`fourws_control.LawInput`. Message side: the
+``fourws_msgs`` types and the standard ``nav_msgs/Odometry``, ``sensor_msgs/Imu``,
+``rosgraph_msgs/Clock`` for RViz, Foxglove and PlotJuggler users.
+
+Times: a simulation time ``t`` in s becomes a ``builtin_interfaces/Time`` rounded to the
+nanosecond; ``VehicleState.sim_time_s`` carries the exact float so nodes that answer a state
+(maneuver, controller) compute with the very number the simulator (and the offline runner)
+used — lockstep runs are then bit-identical to :func:`fourws_sim.closed_loop.run_closed_loop`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+import numpy as np
+
+from fourws_sim.errors import NonFiniteError
+
+NS_PER_S = 1_000_000_000
+#: Number of wheels (FL, FR, RL, RR).
+N_WHEELS = 4
+
+#: Scalar float fields of VehicleState filled from ``Simulator.outputs()``.
+STATE_SCALARS = ("x_m", "y_m", "heading_rad", "speed_mps", "lateral_velocity_mps",
+                 "yaw_rate_radps", "roll_rad", "roll_rate_radps", "sideslip_rad",
+                 "longitudinal_accel_mps2", "lateral_accel_mps2", "front_wheel_angle_rad",
+                 "rear_wheel_angle_rad")
+#: Per-wheel (length-4) fields of VehicleState.
+STATE_WHEELS = ("wheel_speed_radps", "normal_load_n", "slip_angle_rad", "slip_ratio", "fx_n",
+                "fy_n", "mz_nm")
+
+
+# ---------------------------------------------------------------------------- time
+def time_to_ns(time_s: float) -> int:
+    """Simulation time in s -> integer ns (rounded)."""
+    return int(round(float(time_s) * NS_PER_S))
+
+
+def set_stamp(stamp: Any, time_s: float) -> Any:
+    """Fill a ``builtin_interfaces/Time`` with ``time_s`` (s, >= 0); returns it."""
+    ns = time_to_ns(time_s)
+    stamp.sec, stamp.nanosec = divmod(ns, NS_PER_S)
+    return stamp
+
+
+def stamp_to_s(stamp: Any) -> float:
+    """``builtin_interfaces/Time`` -> s."""
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def stamp_to_ns(stamp: Any) -> int:
+    """``builtin_interfaces/Time`` -> integer ns."""
+    return int(stamp.sec) * NS_PER_S + int(stamp.nanosec)
+
+
+# ---------------------------------------------------------------------------- state
+def outputs_finite(outputs: Mapping[str, Any]) -> str:
+    """Name of the first non-finite output field, or ``""`` if all are finite."""
+    for key in STATE_SCALARS:
+        if key in outputs and not math.isfinite(float(outputs[key])):
+            return key
+    for key in STATE_WHEELS:
+        if key in outputs and not np.all(np.isfinite(np.asarray(outputs[key], float))):
+            return key
+    return ""
+
+
+def state_msg(outputs: Mapping[str, Any], *, time_s: float, step: int, model: str,
+              msg: Any = None) -> Any:
+    """``VehicleState`` from ``Simulator.outputs()``.
+
+    Fields missing from ``outputs`` stay zero (single-track models have no wheel data).
+
+    Raises
+    ------
+    NonFiniteError
+        If any value is NaN or infinite (nothing non-finite leaves a node).
+    """
+    from fourws_msgs.msg import VehicleState
+
+    from fourws_ros.topics import FRAME_BODY
+
+    bad = outputs_finite(outputs)
+    if bad:
+        raise NonFiniteError(f"state field {bad} is not finite at t = {time_s} s")
+    m = VehicleState() if msg is None else msg
+    set_stamp(m.header.stamp, time_s)
+    m.header.frame_id = FRAME_BODY
+    m.step = int(step)
+    m.sim_time_s = float(time_s)
+    m.model = model
+    for key in STATE_SCALARS:
+        if key in outputs:
+            setattr(m, key, float(outputs[key]))
+    for key in STATE_WHEELS:
+        if key in outputs:
+            setattr(m, key, np.asarray(outputs[key], dtype=np.float64).reshape(N_WHEELS))
+    return m
+
+
+def state_to_outputs(msg: Any) -> dict[str, Any]:
+    """``VehicleState`` -> the ``Simulator.outputs()`` mapping (what maneuvers read)."""
+    out: dict[str, Any] = {key: float(getattr(msg, key)) for key in STATE_SCALARS}
+    for key in STATE_WHEELS:
+        out[key] = np.array(getattr(msg, key), dtype=np.float64)
+    out["sim_time_s"] = float(msg.sim_time_s)
+    out["step"] = int(msg.step)
+    return out
+
+
+def law_input(msg: Any, delta_f_rad: float | None = None) -> Any:
+    """:class:`fourws_control.LawInput` from a ``VehicleState``.
+
+    Parameters
+    ----------
+    msg : VehicleState
+    delta_f_rad : float, optional
+        Front road-wheel angle the law should see (default: the applied angle in the state).
+    """
+    from fourws_control import LawInput
+
+    return LawInput(
+        delta_f_rad=float(msg.front_wheel_angle_rad if delta_f_rad is None else delta_f_rad),
+        speed_mps=float(msg.speed_mps), yaw_rate_radps=float(msg.yaw_rate_radps),
+        roll_rad=float(msg.roll_rad), roll_rate_radps=float(msg.roll_rate_radps),
+        lateral_velocity_mps=float(msg.lateral_velocity_mps), time_s=float(msg.sim_time_s))
+
+
+# ---------------------------------------------------------------------------- driver input
+def driver_msg(cmd: Any, time_s: float, msg: Any = None) -> Any:
+    """``DriverInput`` from a :class:`fourws_sim.drivers.DriverCommand` at ``time_s``."""
+    from fourws_msgs.msg import DriverInput
+
+    values = cmd.to_dict()
+    check_finite_mapping(values, "driver input")
+    m = DriverInput() if msg is None else msg
+    set_stamp(m.header.stamp, time_s)
+    m.header.frame_id = "base_link"
+    m.steering_wheel_angle_rad = float(values["steering_wheel_angle_rad"])
+    m.front_wheel_angle_rad = float(values["front_wheel_angle_rad"])
+    m.steering_torque_nm = float(values["steering_torque_nm"])
+    m.drive_torque_nm = np.asarray(values["drive_torque_nm"], dtype=np.float64)
+    m.brake_torque_nm = np.asarray(values["brake_torque_nm"], dtype=np.float64)
+    return m
+
+
+def driver_command(msg: Any) -> Any:
+    """``DriverInput`` -> :class:`fourws_sim.drivers.DriverCommand`.
+
+    Raises
+    ------
+    NonFiniteError
+        If a field is NaN or infinite (names the field).
+    """
+    from fourws_sim.drivers import DriverCommand
+
+    cmd = DriverCommand(
+        steering_wheel_angle_rad=float(msg.steering_wheel_angle_rad),
+        front_wheel_angle_rad=float(msg.front_wheel_angle_rad),
+        steering_torque_nm=float(msg.steering_torque_nm),
+        drive_torque_nm=tuple(float(v) for v in msg.drive_torque_nm),
+        brake_torque_nm=tuple(float(v) for v in msg.brake_torque_nm))
+    check_finite_mapping(cmd.to_dict(), "driver input")
+    return cmd
+
+
+def check_finite_mapping(values: Mapping[str, Any], what: str) -> None:
+    """Raise :class:`NonFiniteError` naming the first non-finite field of ``values``."""
+    for key, value in values.items():
+        if isinstance(value, str):
+            continue
+        if not np.all(np.isfinite(np.asarray(value, dtype=np.float64))):
+            raise NonFiniteError(f"{what}: field {key} is not finite ({value!r})")
+
+
+# ---------------------------------------------------------------------------- rear steer
+def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state: Any,
+                 msg: Any = None) -> Any:
+    """``RearSteerCommand`` answering ``state`` (a ``VehicleState``)."""
+    from fourws_msgs.msg import RearSteerCommand
+
+    if not (math.isfinite(angle_rad) and math.isfinite(rate_radps)):
+        raise NonFiniteError(f"rear steer command of law {law} is not finite "
+                             f"(angle {angle_rad!r}, rate {rate_radps!r})")
+    m = RearSteerCommand() if msg is None else msg
+    m.header.stamp = state.header.stamp
+    m.header.frame_id = "base_link"
+    m.angle_rad = float(angle_rad)
+    m.rate_radps = float(rate_radps)
+    m.law = law
+    m.state_stamp = state.header.stamp
+    m.state_step = int(state.step)
+    return m
+
+
+# ---------------------------------------------------------------------------- standard msgs
+def _quaternion_from_euler(roll: float, pitch: float, yaw: float) -> tuple[float, ...]:
+    """(x, y, z, w) of the rotation R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
+
+
+def odometry_msg(state: Any, msg: Any = None) -> Any:
+    """``nav_msgs/Odometry`` of the body (``base_link``) in ``odom`` from a ``VehicleState``.
+
+    Roll enters the orientation (REP-103 roll about +x: positive roll lowers the right side,
+    which is the fourws sign convention).
+    """
+    from nav_msgs.msg import Odometry
+
+    from fourws_ros.topics import FRAME_BODY, FRAME_ODOM
+
+    m = Odometry() if msg is None else msg
+    m.header.stamp = state.header.stamp
+    m.header.frame_id = FRAME_ODOM
+    m.child_frame_id = FRAME_BODY
+    m.pose.pose.position.x = float(state.x_m)
+    m.pose.pose.position.y = float(state.y_m)
+    q = _quaternion_from_euler(float(state.roll_rad), 0.0, float(state.heading_rad))
+    o = m.pose.pose.orientation
+    o.x, o.y, o.z, o.w = q
+    m.twist.twist.linear.x = float(state.speed_mps)
+    m.twist.twist.linear.y = float(state.lateral_velocity_mps)
+    m.twist.twist.angular.x = float(state.roll_rate_radps)
+    m.twist.twist.angular.z = float(state.yaw_rate_radps)
+    return m
+
+
+def imu_msg(state: Any, msg: Any = None) -> Any:
+    """``sensor_msgs/Imu`` at the CG from a ``VehicleState``.
+
+    Linear acceleration is the specific force an IMU measures (REP-145): the body-frame
+    accelerations plus gravity on +z (the small roll tilt of gravity is neglected).
+    """
+    from fourws_sim.params import GRAVITY_MPS2
+    from sensor_msgs.msg import Imu
+
+    from fourws_ros.topics import FRAME_BODY
+
+    m = Imu() if msg is None else msg
+    m.header.stamp = state.header.stamp
+    m.header.frame_id = FRAME_BODY
+    q = _quaternion_from_euler(float(state.roll_rad), 0.0, float(state.heading_rad))
+    o = m.orientation
+    o.x, o.y, o.z, o.w = q
+    m.angular_velocity.x = float(state.roll_rate_radps)
+    m.angular_velocity.z = float(state.yaw_rate_radps)
+    m.linear_acceleration.x = float(state.longitudinal_accel_mps2)
+    m.linear_acceleration.y = float(state.lateral_accel_mps2)
+    m.linear_acceleration.z = GRAVITY_MPS2
+    return m
+
+
+def clock_msg(time_s: float, msg: Any = None) -> Any:
+    """``rosgraph_msgs/Clock`` at ``time_s``."""
+    from rosgraph_msgs.msg import Clock
+
+    m = Clock() if msg is None else msg
+    set_stamp(m.clock, time_s)
+    return m
