@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Sequence
 
 import control
@@ -102,6 +103,12 @@ class ClosedLoop:
     def state_index(self, name: str) -> int:
         """Index of state ``name`` (e.g. ``"V"``)."""
         return self.state_names.index(name)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping (matrices as nested lists, SI)."""
+        return {"model": self.model, "law": self.law, "speed_mps": self.speed_mps,
+                "A": self.A.tolist(), "B": self.B.tolist(),
+                "state_names": list(self.state_names), "input_names": list(self.input_names)}
 
 
 def closed_loop(model_name: str, vehicle: Vehicle, law: Law | str | None,
@@ -526,6 +533,50 @@ def bode(cl: ClosedLoop, frequencies_hz: Sequence[float] | None = None) -> BodeD
             phase[key] = np.degrees(np.unwrap(ph[i, j]))
             units[key] = f"{OUTPUT_UNITS[name]}/{INPUT_UNITS[inp]}"
     return BodeData(f, magnitude, phase, units)
+
+
+def plot_bode(data: BodeData | Sequence[tuple[str, BodeData]], path: str | Path,
+              keys: Sequence[str] | None = None) -> Path:
+    """Draw magnitude (dB) and phase (deg) versus frequency (Hz) to a PNG (Agg backend).
+
+    Parameters
+    ----------
+    data : BodeData or list of (label, BodeData)
+        One response, or several to overlay (e.g. FWS and a law, Figures 4.6/4.7/4.12/4.13).
+    path : str or Path
+        Output PNG.
+    keys : list of str, optional
+        ``"output/input"`` keys to draw (default: every key of the first response).
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    series = [("", data)] if isinstance(data, BodeData) else list(data)
+    if not series:
+        raise ParameterError("data", "nothing to plot")
+    keys = list(keys) if keys is not None else list(series[0][1].magnitude)
+    fig, axes = plt.subplots(2, len(keys), figsize=(4.2 * len(keys), 6.0), squeeze=False,
+                             sharex=True)
+    for k, key in enumerate(keys):
+        for label, bd in series:
+            if key not in bd.magnitude:
+                raise ParameterError("keys", f"no response {key!r}; have {sorted(bd.magnitude)}")
+            axes[0, k].semilogx(bd.frequencies_hz, bd.magnitude_db(key), label=label or None)
+            axes[1, k].semilogx(bd.frequencies_hz, bd.phase_deg[key], label=label or None)
+        axes[0, k].set_title(key)
+        axes[0, k].set_ylabel(f"gain, dB re 1 {series[0][1].units[key]}")
+        axes[1, k].set_ylabel("phase, deg")
+        axes[1, k].set_xlabel("frequency, Hz")
+        for ax in axes[:, k]:
+            ax.grid(True, which="both", alpha=0.3)
+    if any(label for label, _ in series):
+        axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
 
 
 def steady_state_gains(cl: ClosedLoop) -> dict[str, float]:

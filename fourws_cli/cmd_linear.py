@@ -12,7 +12,8 @@ Output (``--json``; keys are stable)::
      "controllability": {...}, "law_gains": {...},
      "critical_speed_mps": float or null        (with --critical-speed),
      "transfer_functions": [...]                (with --transfer-functions),
-     "bode": {"frequencies_hz", "magnitude", "phase_deg", "units"}  (with --bode)}
+     "bode": {"frequencies_hz", "magnitude", "phase_deg", "units"}  (with --bode),
+     "bode_plot": PNG path                       (with --bode-plot)}
 """
 
 from __future__ import annotations
@@ -38,11 +39,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--speed-kmh", required=True, type=float,
                         help="forward speed in km/h (> 0)")
     parser.add_argument("--critical-speed", action="store_true",
-                        help="also search 1-100 m/s for the speed where stability is lost")
+                        help="also search --speed-range-mps for the speed where stability "
+                             "is lost")
+    parser.add_argument("--speed-range-mps", type=float, nargs=2, default=[1.0, 100.0],
+                        metavar=("LO", "HI"), help="critical-speed search range, m/s")
     parser.add_argument("--transfer-functions", action="store_true",
                         help="include the transfer functions (JSON)")
     parser.add_argument("--bode", action="store_true",
                         help="include Bode data, 0.01-10 Hz (JSON)")
+    parser.add_argument("--bode-plot", metavar="PNG",
+                        help="draw the Bode plots of this law and of FWS to a PNG")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
@@ -61,14 +67,19 @@ def run(args: argparse.Namespace) -> int:
     law = build_law(args, vehicle)
     speed = args.speed_kmh / KMH_PER_MPS
     report = linear.linear_report(args.model, vehicle, law, speed,
-                                  with_critical_speed=args.critical_speed)
+                                  with_critical_speed=args.critical_speed,
+                                  speed_range_mps=tuple(args.speed_range_mps))
     out = report.to_dict()
-    if args.transfer_functions or args.bode:
+    if args.transfer_functions or args.bode or args.bode_plot:
         cl = linear.closed_loop(args.model, vehicle, law, speed)
         if args.transfer_functions:
             out["transfer_functions"] = [t.to_dict() for t in linear.transfer_functions(cl)]
         if args.bode:
             out["bode"] = linear.bode(cl).to_dict()
+        if args.bode_plot:
+            fws = linear.closed_loop(args.model, vehicle, "fws", speed)
+            out["bode_plot"] = str(linear.plot_bode(
+                [(law.name, linear.bode(cl)), ("fws", linear.bode(fws))], args.bode_plot))
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
@@ -95,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
         print("steady-state gains:")
         for k, v in gains.items():
             print(f"  {k:<28} {v:12.6g}")
+    if "bode_plot" in out:
+        print(f"Bode plot: {out['bode_plot']}")
     if args.critical_speed:
         cs = out["critical_speed_mps"]
         lo, hi = out["critical_speed_search"]["searched_range_mps"]

@@ -118,3 +118,11 @@ def test_errors_are_one_line_nonzero_exit(capsys, argv, needle):
     rc, out, err = _run(capsys, *argv)
     assert rc == 2
     assert needle in err and len(err.strip().splitlines()) == 1
+
+
+def test_linear_bode_plot(capsys, tmp_path):
+    png = tmp_path / "bode.png"
+    rc, out, _ = _run(capsys, "linear", "--vehicle", "table_4_1_set_1", "--model", "2dof",
+                      "--law", "sol1", "--speed-kmh", "85", "--bode-plot", str(png), "--json")
+    assert rc == 0 and json.loads(out)["bode_plot"] == str(png)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

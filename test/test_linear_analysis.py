@@ -331,3 +331,39 @@ def test_bad_input(vehicles):
         critical_speed("2dof", v, "fws", (50.0, 10.0))
     with pytest.raises(ParameterError, match="frequencies_hz"):
         bode(closed_loop("2dof", v, "fws", 10.0), [0.0, 1.0])
+
+
+def test_3dof_roll_steer_critical_speed_a0(vehicles):
+    """Eqs. 6.62/6.64: with roll steer the FWS 3-DOF characteristic polynomial's a0 changes
+    sign at U = sqrt(-L/K_eff), K_eff = K_us - (eps_f - eps_r) m_s h/(K_phi - m_s g h)
+    (here set 2 with rear roll oversteer, eps_r = -0.1 in fourws' sign)."""
+    import scipy.optimize
+    v = vehicles[2]
+    v = dataclasses.replace(v, roll=dataclasses.replace(v.roll, roll_steer_rear=-0.1))
+    rl = v.roll
+    msh = rl.sprung_mass_kg * rl.roll_arm_m
+    p = msh / (rl.roll_stiffness_nm_per_rad - msh * GRAVITY_MPS2)
+    k_eff = v.understeer_gradient_rad_per_mps2 - (rl.roll_steer_front - rl.roll_steer_rear) * p
+    assert k_eff < 0.0
+    analytic = math.sqrt(-v.chassis.wheelbase_m / k_eff)
+
+    def a0(u: float) -> float:
+        return routh_hurwitz(closed_loop("3dof", v, "fws", u).A).coefficients[-1]
+
+    root = scipy.optimize.brentq(a0, 0.5 * analytic, 2.0 * analytic, xtol=1e-10)
+    assert root == pytest.approx(analytic, rel=1e-7)
+
+
+@pytest.mark.parametrize("model, law, vehicle_key", [("2dof", "sol1", 1),
+                                                    ("3dof", "rwc2_3dof", 1)])
+def test_4ws_yaw_gain_flatter_than_fws(vehicles, model, law, vehicle_key):
+    """Figures 4.6 and 6.13 (85 km/h, data set 1): the 4WS yaw-rate gain is flatter over the
+    drivers' 0-2 Hz than FWS (ratio of max to min gain)."""
+    u = 85 * KMH
+    f = np.geomspace(0.01, 2.0, 100)
+    spread = {}
+    for name in ("fws", law):
+        mag = bode(closed_loop(model, vehicles[vehicle_key], name, u), f).magnitude
+        spread[name] = mag["yaw_rate/DELTA_F"].max() / mag["yaw_rate/DELTA_F"].min()
+    assert spread[law] < spread["fws"]
+    assert spread[law] < 1.5  # within 3.5 dB: "flat"
