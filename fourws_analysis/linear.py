@@ -668,6 +668,7 @@ class LinearReport:
     steady_state_gains: dict[str, float] | None
     critical_speed: CriticalSpeed | None = None
     law_gains: dict[str, float] = field(default_factory=dict)
+    lyapunov: LyapunovCheck | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping with the stable keys of ``fourws linear --json``."""
@@ -683,6 +684,9 @@ class LinearReport:
             "controllability": self.controllability.to_dict(),
             "law_gains": self.law_gains,
         }
+        if self.lyapunov is not None:
+            out["lyapunov"] = {"stable": self.lyapunov.stable,
+                               "leading_minors": self.lyapunov.leading_minors}
         if self.critical_speed is not None:
             out["critical_speed_mps"] = self.critical_speed.critical_speed_mps
             out["critical_speed_search"] = self.critical_speed.to_dict()
@@ -693,7 +697,7 @@ def linear_report(model_name: str, vehicle: Vehicle, law: Law | str | None,
                   speed_mps: float, with_critical_speed: bool = False,
                   speed_range_mps: tuple[float, float] = CRITICAL_SPEED_RANGE_MPS
                   ) -> LinearReport:
-    """Eigen/Routh/controllability/steady-state analysis (and optionally critical speed)."""
+    """Eigen/Routh/Lyapunov/controllability/steady-state analysis (optionally critical speed)."""
     law_obj = _law(law, vehicle)
     cl = closed_loop(model_name, vehicle, law_obj, speed_mps)
     ms = modes(cl.A)
@@ -706,4 +710,4 @@ def linear_report(model_name: str, vehicle: Vehicle, law: Law | str | None,
         if with_critical_speed else None
     return LinearReport(vehicle.name, model_name, law_obj.name, cl.speed_mps, ms, stable,
                         routh_hurwitz(cl.A), controllability(cl.A_open, cl.b_rear), gains,
-                        crit, law_obj.gains_dict(cl.speed_mps))
+                        crit, law_obj.gains_dict(cl.speed_mps), lyapunov_check(cl.A))

@@ -10,6 +10,7 @@ Output (``--json``; keys are stable)::
      "routh_hurwitz": {"coefficients", "first_column", "conditions", "sign_changes", "stable",
                        "array"},
      "controllability": {...}, "law_gains": {...},
+     "lyapunov": {"stable", "leading_minors"}   (chapter 5: A^T P + P A = -I, Sylvester),
      "critical_speed_mps": float or null        (with --critical-speed),
      "transfer_functions": [...]                (with --transfer-functions),
      "bode": {"frequencies_hz", "magnitude", "phase_deg", "units"}  (with --bode),
@@ -96,6 +97,9 @@ def run(args: argparse.Namespace) -> int:
     print("Routh-Hurwitz: " + "; ".join(
         f"{c['name']} ({c['value']:.5g}) {'ok' if c['satisfied'] else 'VIOLATED'}"
         for c in rh["conditions"]))
+    ly = out["lyapunov"]
+    pd = "positive definite" if ly["stable"] else "NOT positive definite"
+    print(f"Lyapunov (A'P + PA = -I): P {pd}")
     ctrb = out["controllability"]
     print(f"controllable by rear steer: {'yes' if ctrb['controllable'] else 'no'} "
           f"(rank {ctrb['rank']}/{ctrb['n_states']})")
@@ -103,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     if gains is None:
         print("steady-state gains: none (zero eigenvalue)")
     else:
-        print("steady-state gains:")
+        print("steady-state gains:" + ("" if out["stable"] else " (not reached: unstable)"))
         for k, v in gains.items():
             print(f"  {k:<28} {v:12.6g}")
     if "bode_plot" in out:

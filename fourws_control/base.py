@@ -228,7 +228,7 @@ class Law(ABC):
         IncompatibleError
             The law uses a signal the model does not have (e.g. roll feedback on a 2-DOF).
         """
-        from fourws_control.signals import signal_map  # local: keeps laws free of model imports
+        from fourws_control.signals import signal_map  # local: signals imports this module
 
         speed = check_speed(speed_mps)
         smap = signal_map(model_name)

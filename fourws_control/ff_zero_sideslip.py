@@ -19,7 +19,8 @@ Option ``ksf``: hold the feed-forward ratio at a given constant and add the yaw-
 
 .. math::
 
-    K_r(U) = \frac{m a}{L C_r} - \frac{b}{U^2} - K_{sf}\left(\frac{a}{U^2} + \frac{m b}{L C_f}\right).
+    K_r(U) = \frac{m a}{L C_r} - \frac{b}{U^2}
+             - K_{sf}\left(\frac{a}{U^2} + \frac{m b}{L C_f}\right).
 
 This is the family whose stability section 4.1.2 analyses: the closed loop is stable only for
 :math:`K_{sf} < 1` (eq. 4.17) and below the speed-dependent bound of eq. 4.16

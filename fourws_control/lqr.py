@@ -23,8 +23,9 @@ their states: ``2dof`` ``[V, r]``, ``2dof-free`` ``[V, r, delta_f]``, ``3dof``
     on the rear angle (eq. 3.12).
 
 Scheduling: the gains are solved at construction on a speed grid from ``min_speed_mps`` to
-``max_speed_mps`` (geometric, ratio ``speed_ratio`` between neighbours) and interpolated linearly per call; above the grid
-the gains of ``max_speed_mps`` are held, below ``min_speed_mps`` they fade to zero
+``max_speed_mps`` (geometric, ratio ``speed_ratio`` between neighbours) and interpolated
+linearly per call; above the grid the gains of ``max_speed_mps`` are held, below
+``min_speed_mps`` they fade to zero
 (:mod:`fourws_control.base`). The Riccati equation is solved with
 ``scipy.linalg.solve_continuous_are``.
 """
