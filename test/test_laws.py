@@ -225,3 +225,21 @@ def test_linear_gains_reject_bad_speed(set1):
     for bad in (0.0, -5.0, math.inf):
         with pytest.raises(ParameterError, match="speed"):
             law.linear_gains("2dof", set1, bad)
+
+
+@pytest.mark.parametrize("name, options", [("rwc4_3dof", {}), ("lqr", {"model": "3dof",
+                                                                       "q_yaw": 1.0}),
+                                           ("sol1", {}), ("rwc1_3dof", {})])
+def test_call_path_equals_linear_gains_path(set1, name, options):
+    """The 100 Hz path (LawInput) and the analysis path (K_x x + K_u u on the 3-DOF model's
+    states) give the same rear angle for the same physical state (signs and units agree)."""
+    law = make_law(name, set1, **options)
+    rng = np.random.default_rng(7)
+    for u in (4.0, 23.0, 47.0):
+        x = rng.normal(size=4) * np.array([0.5, 0.2, 0.02, 0.1])  # V, r, phi, phi_dot
+        delta_f = 0.03
+        g = law.linear_gains("3dof", set1, u)
+        expected = g.K_x @ x + g.K_u @ np.array([delta_f, 0.0])
+        inp = LawInput(delta_f_rad=delta_f, speed_mps=u, yaw_rate_radps=x[1], roll_rad=x[2],
+                       roll_rate_radps=x[3], lateral_velocity_mps=x[0])
+        assert law(inp) == pytest.approx(expected, rel=1e-12, abs=1e-15)
