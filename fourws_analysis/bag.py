@@ -135,8 +135,8 @@ def _default(store: Any, msgtype: str, values: Mapping[str, Any]) -> Any:
                 given = np.asarray(given, dtype=_NUMPY_TYPES.get(sub, object))
             kwargs[name] = given
         elif kind == Nodetype.BASE:
-            kwargs[name] = "" if detail[0] == "string" else (
-                False if detail[0] == "bool" else 0)
+            kwargs[name] = ("" if detail[0] == "string" else False if detail[0] == "bool"
+                            else 0.0 if detail[0].startswith("float") else 0)
         elif kind == Nodetype.ARRAY:
             (sub_kind, sub_detail), length = detail
             if sub_kind == Nodetype.BASE and sub_detail[0] in _NUMPY_TYPES:
@@ -623,7 +623,11 @@ class UniformRun:
         Grid step in s.
     channels : dict of str to ndarray
         ``STATE_CHANNELS`` plus ``steering_wheel_angle_rad`` (driver input, or front road-wheel
-        angle times the steering ratio when no driver input was recorded).
+        angle times the steering ratio when no driver input was recorded) and, when the driver
+        input was recorded, ``front_wheel_angle_cmd_rad``: the driver's road-wheel command.
+        The state's ``front_wheel_angle_rad`` is the angle actually applied, which in the
+        8-DOF includes roll steer; the linear models take the command as their input (roll
+        steer is inside the plant), so the analysis uses the command when it exists.
     config : dict
         Run configuration.
     """
@@ -685,10 +689,11 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
     driver = run.topics.get(TOPIC_DRIVER)
     if driver is not None and len(driver) >= 2 and "steering_wheel_angle_rad" in driver.fields:
         # zero-order hold: a driver command holds until the next one
-        t, v = _monotonic(driver.time_s, driver.fields["steering_wheel_angle_rad"]
-                          .astype(np.float64))
-        idx = np.clip(np.searchsorted(t, grid + 1e-12, side="right") - 1, 0, t.size - 1)
-        channels["steering_wheel_angle_rad"] = v[idx]
+        for src, dst in (("steering_wheel_angle_rad", "steering_wheel_angle_rad"),
+                         ("front_wheel_angle_rad", "front_wheel_angle_cmd_rad")):
+            t, v = _monotonic(driver.time_s, driver.fields[src].astype(np.float64))
+            idx = np.clip(np.searchsorted(t, grid + 1e-12, side="right") - 1, 0, t.size - 1)
+            channels[dst] = v[idx]
     else:
         ratio = _steering_ratio(run.config)
         if ratio is not None and "front_wheel_angle_rad" in channels:
@@ -736,7 +741,12 @@ def write_run(path: str | Path, time_s: np.ndarray, state: Mapping[str, np.ndarr
             msg = make_message(msgtype, header={"frame_id": "base_link"})
             if topic == TOPIC_STATE:
                 msg.model = model
-            arrays = {k: np.asarray(v, dtype=float) for k, v in values.items()}
+            # only the message's own numeric fields; integers stay integers (CDR types)
+            arrays = {k: np.asarray(v) for k, v in values.items()
+                      if k not in ("header", "step") and hasattr(msg, k)
+                      and isinstance(getattr(msg, k), (int, float, np.ndarray))
+                      and not isinstance(getattr(msg, k), bool)}
+            ints = {k for k in arrays if isinstance(getattr(msg, k), int)}
             for i, ti in enumerate(t):
                 ns = int(round(ti * _NS_PER_S))
                 msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, _NS_PER_S)
@@ -744,7 +754,7 @@ def write_run(path: str | Path, time_s: np.ndarray, state: Mapping[str, np.ndarr
                     msg.step = i
                 for key, arr in arrays.items():
                     if arr.ndim == 1:
-                        setattr(msg, key, float(arr[i]))
+                        setattr(msg, key, int(arr[i]) if key in ints else float(arr[i]))
                     else:
                         getattr(msg, key)[:] = arr[i]
                 bag.write_raw(topic, store.serialize_cdr(msg, msgtype), max(ns, 0))

@@ -112,7 +112,7 @@ class RunAnalysis:
                 k: [[float(e.real), float(e.imag)] for e in _lateral_modes(m.eigenvalues)]
                 for k, m in self.models.items()}
             out["model_steady_state_gains"] = {
-                k: {o: m.dc_gain(o) for o in m.C if np.linalg.matrix_rank(m.A) == m.A.shape[0]}
+                k: {o: m.dc_gain(o) for o in m.C}
                 for k, m in self.models.items()}
         if self.modes is not None and self.models:
             out["identified_vs_model"] = {
@@ -152,14 +152,15 @@ def _lateral_modes(eig: np.ndarray) -> np.ndarray:
     return eig[keep][np.argsort(-eig[keep].real)]
 
 
-def _vehicle(run: UniformRun) -> Any:
+def _vehicle(run: UniformRun, key: str = "vehicle") -> Any:
+    """The vehicle (or the controller's ``belief_vehicle``) of the run configuration."""
     from fourws_sim.params import vehicle_from_mapping
 
-    data = run.config.get("vehicle")
+    data = run.config.get(key)
     if not isinstance(data, Mapping):
-        raise MetricUnavailableError("run_config has no 'vehicle' mapping: model overlays and "
+        raise MetricUnavailableError(f"run_config has no {key!r} mapping: model overlays and "
                                      "eigenvalues need it")
-    return vehicle_from_mapping(data, source=f"{run.name}:/fourws/run_config")
+    return vehicle_from_mapping(data, source=f"{run.name}:/fourws/run_config:{key}")
 
 
 def _speed(run: UniformRun) -> float:
@@ -179,7 +180,9 @@ def _speed(run: UniformRun) -> float:
     return float(np.median(speed))
 
 
-def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws") -> fq.LinearSystem:
+def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws",
+                           belief_vehicle: Any = None,
+                           law_options: Mapping[str, Any] | None = None) -> fq.LinearSystem:
     """The 8-DOF model linearized at straight running (finite differences), law closed.
 
     The law's gains (:meth:`fourws_control.base.Law.gains` at the speed) are applied to the
@@ -200,7 +203,8 @@ def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws") -> 
     if law != "fws":
         from fourws_control import Signal, make_law
 
-        k = make_law(law, vehicle).gains(speed_mps)
+        k = make_law(law, belief_vehicle if belief_vehicle is not None else vehicle,
+                     **dict(law_options or {})).gains(speed_mps)
         k_f = float(k[Signal.DELTA_F])
         k_x[s.R] = k[Signal.YAW_RATE]
         k_x[s.PHI] = k[Signal.ROLL]
@@ -208,11 +212,16 @@ def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws") -> 
         k_x[s.V] = k[Signal.LATERAL_VELOCITY]
     a_cl = a + np.outer(b[:, i.DELTA_R], k_x)
     b_cl = b[:, i.DELTA_F] + b[:, i.DELTA_R] * k_f
-    e = np.eye(n)
+    # position and heading feed nothing back (zero columns): drop them, so A is invertible
+    # and the steady-state gains exist
+    keep = np.nonzero(np.any(np.abs(a_cl) > 0.0, axis=0))[0]
+    a_cl, b_cl, k_x = a_cl[np.ix_(keep, keep)], b_cl[keep], k_x[keep]
+    e = np.eye(n)[:, keep]  # row j: state j in the reduced coordinates
+    i_v = list(keep).index(s.V)
     C = {"yaw_rate_radps": e[s.R], "sideslip_rad": e[s.V] / speed_mps,
-         "lateral_accel_mps2": a_cl[s.V] + speed_mps * e[s.R], "roll_rad": e[s.PHI],
-         "rear_wheel_angle_rad": k_x}
-    D = {"yaw_rate_radps": 0.0, "sideslip_rad": 0.0, "lateral_accel_mps2": float(b_cl[s.V]),
+         "lateral_accel_mps2": a_cl[i_v] + speed_mps * e[s.R],
+         "roll_rad": e[s.PHI], "rear_wheel_angle_rad": k_x}
+    D = {"yaw_rate_radps": 0.0, "sideslip_rad": 0.0, "lateral_accel_mps2": float(b_cl[i_v]),
          "roll_rad": 0.0, "rear_wheel_angle_rad": k_f}
     return fq.LinearSystem(f"8dof linearized {law}", a_cl, b_cl, C, D)
 
@@ -252,23 +261,37 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
     if not man:
         res.notes.append("maneuver not recognized (run_config has no maneuver.type): "
                          "metrics chosen from the data are skipped")
-    ch = run.channels
+    ch = dict(run.channels)
     t = run.time_s
+    if "front_wheel_angle_cmd_rad" in ch:
+        # the driver's command is the models' input; the applied angle includes roll steer
+        ch["front_wheel_angle_rad"] = ch["front_wheel_angle_cmd_rad"]
+        res.notes.append("front road-wheel angle = the driver's command (/fourws/driver_input)")
+    elif "front_wheel_angle_rad" in ch:
+        res.notes.append("no /fourws/driver_input: front road-wheel angle = the applied angle "
+                         "of /fourws/state (includes any roll steer)")
 
     tick(f"{run.name}: linear models")
     vehicle = _try(res, "model_overlays", lambda: _vehicle(run))
     res.vehicle = vehicle
+    belief = _try(res, "belief_vehicle", lambda: _vehicle(run, "belief_vehicle")) \
+        if isinstance(run.config.get("belief_vehicle"), Mapping) else None
+    options = run.config.get("law_options") or {}
+    if not isinstance(options, Mapping):
+        options = {}
     if vehicle is not None and math.isfinite(speed):
         for model in ("2dof", "3dof"):
             if model == "3dof" and vehicle.roll is None:
                 continue
             sys_ = _try(res, f"model_{model}",
-                        lambda m=model: fq.linear_system(vehicle, m, speed, res.law))
+                        lambda m=model: fq.linear_system(vehicle, m, speed, res.law,
+                                                         belief, options))
             if sys_ is not None:
                 res.models[model] = sys_
         if vehicle.body is not None:
             sys8 = _try(res, "model_8dof_linearized",
-                        lambda: eightdof_linear_system(vehicle, speed, res.law))
+                        lambda: eightdof_linear_system(vehicle, speed, res.law, belief,
+                                                         options))
             if sys8 is not None:
                 res.models["8dof-lin"] = sys8
 
@@ -338,7 +361,7 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
         tick(f"{run.name}: 8-DOF eigenvalues vs speed")
 
         def sweep() -> linearize.EigenSweep:
-            rows = [eightdof_linear_system(vehicle, v, res.law).eigenvalues
+            rows = [eightdof_linear_system(vehicle, v, res.law, belief, options).eigenvalues
                     for v in SWEEP_SPEEDS_MPS]
             width = max(len(_lateral_modes(r)) for r in rows)
             arr = np.full((len(rows), width), np.nan, dtype=complex)

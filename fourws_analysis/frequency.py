@@ -42,6 +42,8 @@ PHASE_LAG_FREQ_HZ = 1.0
 HALF_POWER_DB = -3.0103
 #: Upper end of the handling band analysed, Hz (driver inputs hardly exceed 3-4 Hz).
 MAX_FREQ_HZ = 5.0
+#: Frequency standing in for 0 Hz when a model's A matrix is singular, Hz.
+DC_LIMIT_HZ = 1e-6
 #: Default Welch segment length, s: 0.1 Hz resolution.
 DEFAULT_SEGMENT_S = 10.0
 
@@ -338,8 +340,16 @@ class LinearSystem:
                                  None, self.label)
 
     def dc_gain(self, output: str) -> float:
-        """Steady-state gain of ``output`` per front road-wheel angle."""
-        return float(self.C[output] @ np.linalg.solve(-self.A, self.b) + self.D[output])
+        """Steady-state gain of ``output`` per front road-wheel angle.
+
+        ``C (-A)^{-1} b + D``; when A is singular (the 8-DOF's coasting-speed and wheel-spin
+        modes have zero eigenvalues at a trim without drag, but the steer does not reach them)
+        the limit of the response at :data:`DC_LIMIT_HZ` is returned.
+        """
+        try:
+            return float(self.C[output] @ np.linalg.solve(-self.A, self.b) + self.D[output])
+        except np.linalg.LinAlgError:
+            return float(self.response(output, np.array([DC_LIMIT_HZ])).response[0].real)
 
     @property
     def eigenvalues(self) -> np.ndarray:

@@ -102,6 +102,17 @@ def steady_state_handling(ay_mps2: np.ndarray, delta_f_rad: np.ndarray, yaw_rate
     ay = np.asarray(ay_mps2, dtype=float)
     u = np.asarray(speed_mps, dtype=float)
     sel = (np.abs(ay) <= linear_range_mps2) & (u > MIN_SPEED_MPS)
+    # only the first pass through the linear range: a run that goes on past the limit (spin,
+    # or a ramp that turns back) must not mix post-limit samples into the fit
+    over = np.nonzero(~sel)[0]
+    first_in = np.nonzero(sel)[0]
+    notes: list[str] = []
+    if first_in.size:
+        later_over = over[over > first_in[0]]
+        if later_over.size:
+            sel[later_over[0]:] = False
+            notes.append(f"fitted up to the first exit from |a_y| <= {linear_range_mps2} m/s^2 "
+                         f"(sample {later_over[0]} of {ay.size})")
     if np.count_nonzero(sel) < 10 or np.ptp(ay[sel]) < MIN_SPAN_MPS2:
         span = float(np.ptp(ay[sel])) if np.any(sel) else 0.0
         raise MetricUnavailableError(
@@ -121,7 +132,6 @@ def steady_state_handling(ay_mps2: np.ndarray, delta_f_rad: np.ndarray, yaw_rate
     if roll_rad is not None and np.ptp(np.asarray(roll_rad)[sel]) > 0.0:
         curves["roll_rad"] = np.asarray(roll_rad, dtype=float)[sel]
         roll_g = _slope(ay_s, curves["roll_rad"])
-    notes = []
     v_char = math.sqrt(wheelbase_m / kus) if kus > 0 else None
     v_crit = math.sqrt(-wheelbase_m / kus) if kus < 0 else None
     if kus == 0.0:
