@@ -60,6 +60,7 @@ class ManeuverNode(Node):
                                                 topics.MANEUVER_STATUS, topics.STATUS_QOS)
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                  self._on_state, topics.STREAM_QOS)
+        self._driver_msg = topics.message_class(topics.DRIVER_INPUT)()
         self._phase = ""
         self._done = False
         self.get_logger().info(f"maneuver {self.maneuver.name} "
@@ -89,7 +90,7 @@ class ManeuverNode(Node):
             return
         try:
             cmd = self.maneuver.command(t, outputs)
-            self.driver_pub.publish(conversions.driver_msg(cmd, t))
+            self.driver_pub.publish(conversions.driver_msg(cmd, t, self._driver_msg))
         except FourwsError as exc:
             self._done = True
             self._status(state, "done", self.maneuver.progress(t), True, f"abort: {exc}")

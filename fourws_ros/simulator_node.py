@@ -182,6 +182,11 @@ class SimulatorNode(Node):
         self.create_subscription(msg(topics.RECORDER_PROGRESS), topics.RECORDER_PROGRESS,
                                  self._on_recorder_progress, topics.STATUS_QOS)
         self.recorder_window = int(self._param("recorder_window_ticks"))
+        # one message object each, refilled per publication (publish serializes at once)
+        self._state_msg = msg(topics.STATE)()
+        self._clock_msg = msg(topics.CLOCK)()
+        self._odom_msg = msg(topics.ODOM)()
+        self._imu_msg = msg(topics.IMU)()
         self.create_service(Trigger, topics.SRV_RESET, self._on_reset)
         self.create_service(SetBool, topics.SRV_PAUSE, self._on_pause)
 
@@ -222,6 +227,9 @@ class SimulatorNode(Node):
         self._blocked_state: Any = None  # lockstep: a tick held back by flow control
         self.ticks_published = 0
         self.recorder_states = 0
+        self.answer_wait_s = 0.0  # lockstep: wall time from state sent to both answers in
+        self.tick_work_s = 0.0  # lockstep: wall time integrating and publishing
+        self._sent_at = 0.0
         self._await_since = 0.0
         self._started = False
 
@@ -328,7 +336,7 @@ class SimulatorNode(Node):
         t = float(outputs.get("sim_time_s", self.sim.time_s))
         try:
             state = conversions.state_msg(outputs, time_s=t, step=self.step_count,
-                                          model=self.model_name)
+                                          model=self.model_name, msg=self._state_msg)
         except NonFiniteError as exc:
             self._stop(f"non-finite state: {exc}")
             return
@@ -343,8 +351,9 @@ class SimulatorNode(Node):
         self.ticks_published += 1
         self._awaiting = state
         self._await_since = time.monotonic()
-        self.clock_pub.publish(conversions.clock_msg(t))
-        self.state_pub.publish(state)
+        self._sent_at = time.perf_counter()
+        self.state_pub.publish(state)  # first: the answers' critical path starts here
+        self.clock_pub.publish(conversions.clock_msg(t, self._clock_msg))
         self._publish_side(state, t)
 
     def _lockstep_try_advance(self, timed_out: bool = False) -> None:
@@ -370,8 +379,11 @@ class SimulatorNode(Node):
                 f"{self._cfg['command_timeout_s']} s: zero rear steer ({self.stale_commands} "
                 "timed-out ticks)", throttle_duration_sec=1.0)
         self._awaiting = None
+        now = time.perf_counter()
+        self.answer_wait_s += now - self._sent_at
         if self._integrate(rear, self.n_control):
             self._publish_tick()
+        self.tick_work_s += time.perf_counter() - now
 
     def _integrate(self, rear_rad: float, n_steps: int) -> bool:
         from fourws_sim.closed_loop import simulator_inputs
@@ -391,8 +403,8 @@ class SimulatorNode(Node):
 
     def _publish_side(self, state: Any, t: float) -> None:
         if t >= self._next_viz_s - 1e-12:
-            self.odom_pub.publish(conversions.odometry_msg(state))
-            self.imu_pub.publish(conversions.imu_msg(state))
+            self.odom_pub.publish(conversions.odometry_msg(state, self._odom_msg))
+            self.imu_pub.publish(conversions.imu_msg(state, self._imu_msg))
             self._next_viz_s = t + self._cfg["viz_period_s"]
         if t >= self._next_status_s - 1e-12:
             self._publish_status(t, running=True)
@@ -470,9 +482,9 @@ class SimulatorNode(Node):
                     outputs = self.sim.outputs()
                     t = float(outputs.get("sim_time_s", self.sim.time_s))
                     state = conversions.state_msg(outputs, time_s=t, step=self.step_count,
-                                                  model=self.model_name)
-                    self.clock_pub.publish(conversions.clock_msg(t))
+                                                  model=self.model_name, msg=self._state_msg)
                     self.state_pub.publish(state)
+                    self.clock_pub.publish(conversions.clock_msg(t, self._clock_msg))
                     self._publish_side(state, t)
 
     def _stop_rt_thread(self) -> None:
@@ -483,7 +495,12 @@ class SimulatorNode(Node):
             self._started = False
 
     def on_shutdown(self, _executor: Any) -> None:
-        """Stop the realtime thread and publish the final status."""
+        """Stop the realtime thread, publish the final status, log the timing."""
+        if self.clock_mode == "lockstep" and self.ticks_published > 1:
+            n = self.ticks_published - 1
+            self.get_logger().info(
+                f"lockstep: {n} ticks, mean answer wait {self.answer_wait_s / n * 1e3:.3f} ms, "
+                f"mean own work {self.tick_work_s / n * 1e3:.3f} ms per tick")
         self.paused = True
         self._stop_rt_thread()
         if not self.stop_reason:
