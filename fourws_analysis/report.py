@@ -36,6 +36,8 @@ BODE_OUTPUTS = (
 )
 #: Model gains are drawn no lower than this below the lowest measured gain, dB.
 GAIN_FLOOR_BELOW_DB = 20.0
+#: Eigenvalues with real part below minus this (wheel spin, tire lag, actuator) are not drawn.
+EIG_PLOT_MIN_REAL = 40.0
 _MODEL_STYLES = {"2dof": ("--", "0.25"), "3dof": (":", "0.1"), "8dof-lin": ("-.", "tab:red")}
 
 Progress = Callable[[str], None]
@@ -166,11 +168,12 @@ def plot_step(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
         ax.axhline(1.0, color="0.5", lw=0.8)
         ax.axhline(0.9, color="0.5", lw=0.6, ls=":")
         ax.axvline(0.0, color="0.5", lw=0.6, ls=":")
-        ax.set_title(f"{title} (normalized; ○ 90 % response time, ▽ peak)", loc="left",
-                     fontweight="bold")
+        ax.set_title(title, loc="left", fontweight="bold")
         ax.set_xlabel("time from 50 % steer (s)")
     axes[0].set_ylabel("response / steady state")
     axes[0].legend(loc="lower right")
+    fig.suptitle("ISO 7401 step response, normalized by the steady state "
+                 "(○ 90 % response time, ▽ peak)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
@@ -211,39 +214,50 @@ def plot_steady_state(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
 
 
 def plot_eigenvalues(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
-    """Eigenvalues: 8-DOF linearized vs speed (coloured by speed), model and identified."""
-    sweeps = [r for r in runs if r.eig_sweep is not None or r.modes is not None or r.models]
-    if not sweeps:
+    """Eigenvalues, one panel per law: the 8-DOF linearized vs speed (coloured by speed),
+    the linear models at the run speed and the eigenvalues identified from each run."""
+    usable = [r for r in runs if r.eig_sweep is not None or r.modes is not None or r.models]
+    if not usable:
         return None
+    groups: dict[str, list[RunAnalysis]] = {}
+    for r in usable:
+        groups.setdefault(r.law, []).append(r)
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 5.5))
+    n = len(groups)
+    fig, axes = plt.subplots(1, n, figsize=(6.2 * n + 1.2, 5.2), squeeze=False)
     markers = {"2dof": "s", "3dof": "D", "8dof-lin": "^"}
     sc = None
-    for k, r in enumerate(sweeps):
-        if r.eig_sweep is not None:
-            ev = r.eig_sweep.eigenvalues
-            speeds = np.repeat(r.eig_sweep.speed_mps[:, None], ev.shape[1], axis=1)
-            ok = np.isfinite(ev) & (ev.real > -40)  # wheel-spin/tire-lag modes lie far left
-            sc = ax.scatter(ev.real[ok], ev.imag[ok], c=speeds[ok], cmap="viridis", s=12,
-                            label="8-DOF linearized (colour: speed)" if k == 0 else None)
-        for name, m in r.models.items():
+    for ax, (law, members) in zip(axes[0], groups.items()):
+        first = members[0]
+        if first.eig_sweep is not None:
+            ev = first.eig_sweep.eigenvalues
+            speeds = np.repeat(first.eig_sweep.speed_mps[:, None], ev.shape[1], axis=1)
+            ok = np.isfinite(ev) & (ev.real > -EIG_PLOT_MIN_REAL)
+            sc = ax.scatter(ev.real[ok], ev.imag[ok], c=speeds[ok], cmap="viridis", s=14,
+                            vmin=min(first.eig_sweep.speed_mps),
+                            vmax=max(first.eig_sweep.speed_mps),
+                            label="8-DOF linearized vs speed")
+        for name, m in first.models.items():
             e = m.eigenvalues
-            e = e[(np.abs(e) > 1e-6) & (e.real > -40)]
-            ax.plot(e.real, e.imag, markers.get(name, "o"), mfc="none", color=f"C{k}", ms=8,
-                    label=f"{name} model, {r.speed_mps:.0f} m/s ({r.name})")
-        if r.modes is not None:
-            e = r.modes.eigenvalues
-            ax.plot(e.real, e.imag, "x", color=f"C{k}", ms=10, mew=2,
-                    label=f"identified from {r.name}")
+            e = e[(np.abs(e) > 1e-6) & (e.real > -EIG_PLOT_MIN_REAL)]
+            ax.plot(e.real, e.imag, markers.get(name, "o"), mfc="none", mec="k", ms=9,
+                    label=f"{name} at {first.speed_mps:.1f} m/s")
+        for k, r in enumerate(members):
+            if r.modes is not None:
+                e = r.modes.eigenvalues
+                e = e[e.real > -EIG_PLOT_MIN_REAL]
+                ax.plot(e.real, e.imag, "x", color=f"C{k + 1}", ms=11, mew=2.2,
+                        label=f"identified: {r.name}")
+        ax.axvline(0.0, color="k", lw=0.8)
+        ax.set_xlabel("real part (1/s)")
+        ax.set_title(f"law {law}", loc="left", fontweight="bold")
+        ax.legend(loc="upper left", fontsize=7)
+    axes[0][0].set_ylabel("imaginary part (rad/s)")
     if sc is not None:
-        fig.colorbar(sc, ax=ax, label="speed (m/s)")
-    ax.axvline(0.0, color="k", lw=0.8)
-    ax.set_xlabel("real part (1/s)")
-    ax.set_ylabel("imaginary part (rad/s)")
-    ax.set_title("Eigenvalues of the lateral/yaw/roll modes", loc="left", fontweight="bold")
-    ax.legend(loc="best", fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
+        fig.colorbar(sc, ax=list(axes[0]), label="speed (m/s)", fraction=0.03)
+    fig.suptitle("Eigenvalues of the lateral, yaw and roll modes (faster than "
+                 f"-{EIG_PLOT_MIN_REAL:g} 1/s left out)", fontsize=10)
+    fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
     return path
 
@@ -355,9 +369,20 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
              ("ISO 7401 step response", plot_step, "step.png", ""),
              ("ISO 4138 steady-state handling", plot_steady_state, "steady_state.png", ""),
              ("Stability: eigenvalues", plot_eigenvalues, "eigenvalues.png",
-              "Modes faster than -40 1/s (wheel spin, tire lag) are left out."))
+              "One panel per law. Modes faster than -40 1/s (wheel spin, tire lag, actuator) are left "
+              "out; an eigenvalue right of the axis is an unstable mode."))
     if runs:
-        for title, fn, fname, caption in plots:
+        # time histories: one figure per maneuver, so a 60 s sweep does not flatten a 5 s step
+        groups: dict[str, list[RunAnalysis]] = {}
+        for r in runs:
+            groups.setdefault(r.run.maneuver or "unrecognized", []).append(r)
+        for man, members in groups.items():
+            tick(f"plot time histories {man}")
+            sections.append((f"Time histories: {man}",
+                             plot_time_histories(members, out / f"time_histories_{man}.png"),
+                             "Overlaid runs; time from the start of each record; angles as "
+                             "applied (front includes roll steer)."))
+        for title, fn, fname, caption in plots[1:]:
             tick(f"plot {fname}")
             sections.append((title, fn(runs, out / fname), caption))
     metrics = {"runs": {r.name: r.metrics() for r in runs}, "failed_bags": dict(failures or {})}

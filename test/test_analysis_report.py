@@ -42,7 +42,7 @@ def test_report_and_metrics_of_a_step_run(tmp_path: Path, capsys) -> None:
                "--quiet"])
     assert rc == 0
     assert (tmp_path / "rep" / "index.html").is_file()
-    for png in ("time_histories.png", "step.png", "eigenvalues.png"):
+    for png in ("time_histories_step_steer.png", "step.png", "eigenvalues.png"):
         assert (tmp_path / "rep" / png).stat().st_size > 10_000
     html = (tmp_path / "rep" / "index.html").read_text()
     assert "step.png" in html and "TB factor" in html
