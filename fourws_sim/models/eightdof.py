@@ -30,15 +30,22 @@ in :math:`\dot V, \dot r, \dot p` is solved in closed form, then :math:`\dot U`.
 Pose: :math:`\dot X = U\cos\psi - V\sin\psi`, :math:`\dot Y = U\sin\psi + V\cos\psi`,
 :math:`\dot\psi = r` (eqs. 8.15-8.17).
 
-Wheels (eqs. 8.5-8.8): :math:`I_w \dot\omega_i = T_{d,i} - R F_{x,i} + T_{f,i}` with the
-friction torque of brake plus rolling resistance, capacity
-:math:`T_{c,i} = T_{b,i} + f_r F_{z,i} R`, applied as a *clamped viscous* torque
-:math:`T_{f,i} = -\mathrm{sign}(\omega_i) \min(T_{c,i}, I_w |\omega_i| / \tau_b)`: exactly
-Coulomb friction while the wheel turns faster than :math:`T_c\tau_b/I_w`, and a stiff linear
-hold below it, so a braked wheel decays to (not through) zero, a locked wheel stays locked
-(it creeps at :math:`\omega = R|F_x|\tau_b/I_w`, a few per cent of slip) and nothing chatters
-with a fixed step. :math:`\tau_b` = :data:`BRAKE_HOLD_TIME_S`; a brake cannot spin a wheel
-backwards.
+Wheels (eqs. 8.5-8.8): :math:`I_w \dot\omega_i = T_{o,i} + T_{f,i}` with
+:math:`T_{o,i} = T_{d,i} - R F_{x,i}` (drive torque and tire force) and the friction torque
+of brake plus rolling resistance, capacity :math:`T_{c,i} = T_{b,i} + f_r F_{z,i} R`, in a
+stick-slip form that a fixed step integrates without chatter (Karnopp's friction model with a
+continuous stick law):
+
+* sliding, :math:`I_w|\omega_i| \ge T_c \tau_b`:
+  :math:`I_w\dot\omega_i = T_o - \mathrm{sign}(\omega_i) T_c` (Coulomb friction);
+* stuck band, :math:`I_w|\omega_i| < T_c \tau_b`:
+  :math:`I_w\dot\omega_i = (T_o - \mathrm{clip}(T_o, -T_c, T_c)) - I_w\omega_i/\tau_b`:
+  while the other torques stay within the capacity the brake holds the wheel and its spin
+  decays to zero (never through it: a brake cannot spin a wheel backwards, a locked wheel
+  stays exactly locked, a braked car at rest does not creep under a smaller drive torque);
+  torque beyond the capacity breaks the wheel loose.
+
+:math:`\tau_b` = :data:`BRAKE_HOLD_TIME_S`. With :math:`T_c = 0` it is the free wheel.
 
 Geometry (eqs. 8.32-8.50)
 -------------------------
@@ -189,9 +196,8 @@ WHEELS = ("FL", "FR", "RL", "RR")
 #: Lag of the accelerations that drive load transfer, s. Short against the handling time
 #: scales (yaw/roll ~0.1-1 s) and long against the 1 ms step (RK4-stable for steps < ~25 ms).
 LOAD_TRANSFER_TIME_S = 0.01
-#: Time constant of the clamped-viscous friction hold of brakes and rolling resistance, s.
-#: RK4 stays stable with it for steps up to ~5 ms; smaller values hold a locked wheel closer to
-#: zero spin but stiffen the wheel equation.
+#: Time constant with which a held (braked, stuck) wheel's spin decays to zero, s. RK4 is
+#: stable with it for steps up to ~5 ms; it also sets the stuck band |omega| < T_c tau_b/I_w.
 BRAKE_HOLD_TIME_S = 2.0e-3
 #: Smallest slip denominator, m/s (see :func:`params_for` for how it is raised for stiff tires).
 V_MIN_DEFAULT_MPS = 1.0
@@ -504,11 +510,13 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     vd, rd, pd = _solve_body(m, msh * c, q[P.IZ], q[P.IXZ], q[P.IX], rhs_y, sum_n, rhs_l)
     ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
 
-    # wheel spin (8.5-8.8) with the clamped-viscous friction torque
+    # wheel spin (8.5-8.8) with stick-slip brake and rolling-resistance friction
     cap = np.maximum(u[I.BRAKE_FL:I.BRAKE_RR + 1], 0.0) + q[P.F_RR] * fz * rw
-    hold = iw * np.abs(omega) / q[P.TAU_B]
-    t_fric = -np.sign(omega) * np.minimum(cap, hold)
-    omegad = (u[I.DRIVE_FL:I.DRIVE_RR + 1] - rw * fx + t_fric) / iw
+    t_other = u[I.DRIVE_FL:I.DRIVE_RR + 1] - rw * fx
+    sliding = iw * np.abs(omega) >= cap * q[P.TAU_B]
+    omegad = np.where(sliding,
+                      (t_other - np.sign(omega) * cap) / iw,
+                      (t_other - np.clip(t_other, -cap, cap)) / iw - omega / q[P.TAU_B])
 
     ax = ud - V * r
     ay = vd + U * r

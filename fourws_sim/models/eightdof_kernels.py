@@ -161,13 +161,21 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         if brake < 0.0:
             brake = 0.0
         cap = brake + q[k_frr] * fz * rw
-        hold = iw * abs(om) / q[k_tb]
-        tfric = cap if cap < hold else hold
-        if om > 0.0:
-            tfric = -tfric
-        elif om == 0.0:
-            tfric = 0.0
-        dx[i_w0 + i] = (u[j_d0 + i] - rw * fx + tfric) / iw
+        t_other = u[j_d0 + i] - rw * fx
+        if iw * abs(om) >= cap * q[k_tb]:  # sliding: Coulomb friction
+            if om > 0.0:
+                t_other -= cap
+            elif om < 0.0:
+                t_other += cap
+            dx[i_w0 + i] = t_other / iw
+        else:  # stuck band: held, only torque beyond the capacity moves the wheel
+            if t_other > cap:
+                excess = t_other - cap
+            elif t_other < -cap:
+                excess = t_other + cap
+            else:
+                excess = 0.0
+            dx[i_w0 + i] = excess / iw - om / q[k_tb]
         aux[a_fz + i] = fz
         aux[a_al + i] = alpha_t
         aux[a_ka + i] = kappa
