@@ -347,7 +347,8 @@ def test_rolling_to_a_stop_under_brake(vehicle: Vehicle) -> None:
     # C/sigma at rest) by a few cm/s, then settles
     assert speed_min > -0.05
     assert np.max(np.abs(x[[STATE.U, STATE.V, STATE.R, STATE.P]])) < 1e-6
-    assert np.all(np.abs(x[STATE.OMEGA_FL:STATE.OMEGA_RR + 1]) < 1e-12)  # locked
+    assert np.all(np.abs(x[STATE.OMEGA_FL:STATE.OMEGA_RR + 1])
+                  <= eightdof.HELD_SPIN_FLOOR_RADPS)  # locked
 
 
 def test_creep_from_rest_with_drive_torque(vehicle: Vehicle) -> None:

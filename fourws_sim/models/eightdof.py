@@ -41,7 +41,7 @@ continuous stick law):
 * stuck band, :math:`I_w|\omega_i| < T_c \tau_b`:
   :math:`I_w\dot\omega_i = (T_o - \mathrm{clip}(T_o, -T_c, T_c)) - I_w\omega_i/\tau_b`:
   while the other torques stay within the capacity the brake holds the wheel and its spin
-  decays to zero (never through it: a brake cannot spin a wheel backwards, a locked wheel
+  decays to zero (to :data:`HELD_SPIN_FLOOR_RADPS`; never through it: a brake cannot spin a wheel backwards, a locked wheel
   stays exactly locked, a braked car at rest does not creep under a smaller drive torque);
   torque beyond the capacity breaks the wheel loose.
 
@@ -199,6 +199,10 @@ LOAD_TRANSFER_TIME_S = 0.01
 #: Time constant with which a held (braked, stuck) wheel's spin decays to zero, s. RK4 is
 #: stable with it for steps up to ~5 ms; it also sets the stuck band |omega| < T_c tau_b/I_w.
 BRAKE_HOLD_TIME_S = 2.0e-3
+#: Spin below which a held wheel counts as locked and stops decaying, rad/s (3e-10 m/s at the
+#: rim). Without it the exponential decay runs into subnormal numbers after ~1.5 s of lock,
+#: which are slow on x86 CPUs.
+HELD_SPIN_FLOOR_RADPS = 1.0e-9
 #: Smallest slip denominator, m/s (see :func:`params_for` for how it is raised for stiff tires).
 V_MIN_DEFAULT_MPS = 1.0
 #: Step for which :func:`params_for` sizes ``v_min`` so the wheel-spin equation stays inside
@@ -514,9 +518,10 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     cap = np.maximum(u[I.BRAKE_FL:I.BRAKE_RR + 1], 0.0) + q[P.F_RR] * fz * rw
     t_other = u[I.DRIVE_FL:I.DRIVE_RR + 1] - rw * fx
     sliding = iw * np.abs(omega) >= cap * q[P.TAU_B]
+    held_decay = np.where(np.abs(omega) > HELD_SPIN_FLOOR_RADPS, omega / q[P.TAU_B], 0.0)
     omegad = np.where(sliding,
                       (t_other - np.sign(omega) * cap) / iw,
-                      (t_other - np.clip(t_other, -cap, cap)) / iw - omega / q[P.TAU_B])
+                      (t_other - np.clip(t_other, -cap, cap)) / iw - held_decay)
 
     ax = ud - V * r
     ay = vd + U * r

@@ -17,7 +17,8 @@ import numpy as np
 
 from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA_F,
                                         _AUX_DELTA_R, _AUX_FX, _AUX_FY, _AUX_FZ, _AUX_KAPPA,
-                                        _AUX_MZ, INPUT, N_AUX, N_STATE, PARAM, STATE)
+                                        _AUX_MZ, HELD_SPIN_FLOOR_RADPS, INPUT, N_AUX,
+                                        N_STATE, PARAM, STATE)
 from fourws_sim.tires import get_tire
 
 #: Tire model of this variant (set by ``kernels_for`` before the module body runs).
@@ -64,6 +65,7 @@ k_mu, k_frr, k_sig, k_vmin = (int(PARAM.MU), int(PARAM.F_RR), int(PARAM.SIGMA),
                               int(PARAM.V_MIN))
 k_tlt, k_tb, k_g = int(PARAM.TAU_LT), int(PARAM.TAU_B), int(PARAM.G)
 a_fz, a_al, a_ka, a_fx, a_fy, a_mz = _AUX_FZ, _AUX_ALPHA, _AUX_KAPPA, _AUX_FX, _AUX_FY, _AUX_MZ
+HELD_FLOOR = float(HELD_SPIN_FLOOR_RADPS)
 a_df, a_dr, a_ax, a_ay = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY
 
 
@@ -175,7 +177,9 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
                 excess = t_other + cap
             else:
                 excess = 0.0
-            dx[i_w0 + i] = excess / iw - om / q[k_tb]
+            if abs(om) > HELD_FLOOR:
+                excess -= iw * om / q[k_tb]
+            dx[i_w0 + i] = excess / iw
         aux[a_fz + i] = fz
         aux[a_al + i] = alpha_t
         aux[a_ka + i] = kappa
