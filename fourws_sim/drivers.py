@@ -35,9 +35,14 @@ follow MacAdam (1981), "Application of an optimal preview control for simulation
 automobile driving", IEEE Trans. SMC 11(6). The curvature is turned into a front road-wheel
 angle with the driver's internal model of the car, the steady-state inverse of the linear
 bicycle model, ``delta_f = (L + K_us U^2) kappa`` (``K_us`` the understeer gradient of the
-vehicle's axle cornering stiffnesses), plus a slow integral of the lateral path error — the
-trim a human driver applies in steady cornering — which removes the remaining offset that tire
-nonlinearity and a rear-steer law (which changes the car's steady-state gain) leave.
+vehicle's axle cornering stiffnesses), plus an optional feedback of the yaw-rate shortfall
+``k_r (U kappa - r)`` (the driver feels that the car turns less than asked, e.g. when a
+rear-steer law lowers its yaw gain, and steers more), plus a slow integral of the lateral path
+error — the trim a human driver applies in steady cornering — which removes the remaining
+offset that tire nonlinearity and a rear-steer law (which changes the car's steady-state gain)
+leave:
+
+    delta_f = (L + K_us U^2) kappa + k_r (U kappa - r) - k_i \int e_y dt.
 """
 
 from __future__ import annotations
@@ -276,6 +281,8 @@ class PathDriverSpec:
     min_preview_m: float = _spec(default=5.0, doc="L_min, minimum preview distance")
     integral_gain_rad_per_ms: float = _spec("nonnegative", default=0.02,
                                             doc="k_i, road-wheel rad per (m s) of path error")
+    yaw_rate_gain_s: float = _spec("nonnegative", default=0.0,
+                                   doc="k_r, road-wheel rad per rad/s of yaw-rate shortfall")
     steer_limit_rad: float = _spec(default=0.6, doc="|delta_f| limit")
 
 
@@ -321,7 +328,9 @@ class PreviewPathDriver:
         curvature = 2.0 * lateral / dist2 if dist2 > 0.0 else 0.0
         error = self.path.lateral_error(x, y)
         self._integral_ms += error * dt
+        yaw_rate = float(outputs["yaw_rate_radps"])
         delta = ((self._wheelbase_m + self._k_us * speed * speed) * curvature
+                 + self.spec.yaw_rate_gain_s * (speed * curvature - yaw_rate)
                  - self.spec.integral_gain_rad_per_ms * self._integral_ms)
         limit = self.spec.steer_limit_rad
         return min(max(delta, -limit), limit)

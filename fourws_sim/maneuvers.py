@@ -123,9 +123,11 @@ class RampSteerParams:
 class SlowRampSteerParams(RampSteerParams):
     """ISO 4138 constant-speed method: steer increased slowly (default rate well under the
     standard's quasi-steady limit) at constant speed; the run ends when
-    ``|a_y| >= max_lateral_accel_mps2`` or at the final angle's end of ``duration_s``."""
+    ``|a_y| >= max_lateral_accel_mps2``, when ``|sideslip| > max_sideslip_rad`` (the car left
+    the quasi-steady regime: it is spinning), or at ``duration_s``."""
 
     max_lateral_accel_mps2: float = _spec(default=8.0)
+    max_sideslip_rad: float = _spec(default=0.15)
 
 
 @dataclass(frozen=True)
@@ -683,6 +685,8 @@ class Maneuver:
         if kind == "slow_ramp_steer":
             if abs(float(outputs["lateral_accel_mps2"])) >= p.max_lateral_accel_mps2:
                 self._aborted = "lateral acceleration limit reached"
+            elif abs(float(outputs.get("sideslip_rad", 0.0))) > p.max_sideslip_rad:
+                self._aborted = "sideslip limit reached (the car spins)"
         elif kind == "constant_radius" and self._path_driver is not None:
             error = self._path_driver.path.lateral_error(float(outputs["x_m"]),
                                                          float(outputs["y_m"]))
