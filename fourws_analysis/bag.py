@@ -317,8 +317,14 @@ class RunData:
 
     @property
     def name(self) -> str:
-        """Short label of the run (the bag's folder or file name)."""
-        return Path(self.path).name
+        """Short label of the run: the bag's folder (or ``.mcap`` file stem); a folder named
+        ``bag`` (the launcher's ``<run>/bag`` layout) is labelled by its run folder."""
+        path = Path(self.path)
+        if path.suffix == ".mcap":
+            path = path.with_suffix("")
+        if path.name == "bag" and path.parent.name:
+            return path.parent.name
+        return path.name
 
     @property
     def maneuver(self) -> str:

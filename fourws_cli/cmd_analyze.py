@@ -71,6 +71,9 @@ def run(args: argparse.Namespace) -> int:
         except FourwsError as exc:
             failures[path] = str(exc)
             continue
+        base, k = uniform.name, 2
+        while uniform.name in {a.name for a in analyses}:  # labels key the metrics
+            uniform.name, k = f"{base}#{k}", k + 1
         result = analyze_run(uniform, eig_sweep=not args.no_sweep, progress=bar)
         result.notes.extend(run_data.warnings)
         analyses.append(result)

@@ -88,6 +88,11 @@ def test_truncated_bag_partial_or_clear_error(tmp_path: Path) -> None:
     # recovered messages are intact and in order
     np.testing.assert_allclose(run.topics[B.TOPIC_STATE].fields["yaw_rate_radps"],
                                np.sin(np.arange(n) * 1e-3), atol=1e-9)
+    # a recorder killed by SIGKILL leaves no metadata.yaml either
+    (tmp_path / "b" / "metadata.yaml").unlink()
+    run = B.load_bag(tmp_path / "b")
+    assert len(run.topics[B.TOPIC_STATE]) == n
+    assert run.maneuver == "step_steer"
     mcap.write_bytes(data[:100])
     with pytest.raises(B.BagError, match=r"cannot read bag .*b'.*truncated or corrupt"):
         B.load_bag(tmp_path / "b")
