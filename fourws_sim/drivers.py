@@ -1,4 +1,4 @@
-"""Driver models: the speed-hold driver and a single-point preview path follower.
+r"""Driver models: the speed-hold driver and a single-point preview path follower.
 
 A maneuver (:mod:`fourws_sim.maneuvers`) combines an open-loop steering waveform or a path
 follower with the speed-hold driver into one :class:`DriverCommand` per control tick.
@@ -15,7 +15,7 @@ calls, by ``dt = t - t_previous`` of the times they are given (0 on the first ca
 Speed-hold driver
 -----------------
 A PI controller from the speed error ``e = U_target - U`` (m/s) to a longitudinal acceleration
-request ``a = kp e + ki \\int e dt`` (m/s^2), turned into a total wheel torque
+request ``a = kp e + ki \int e dt`` (m/s^2), turned into a total wheel torque
 ``T = m R (a + f_r g)`` (N m; ``m`` vehicle mass, ``R`` wheel radius, ``f_r`` rolling-resistance
 coefficient of the tire data). ``T > 0`` is shared equally by the driven wheels; ``T < 0`` is
 applied as brake torque split front/rear by ``brake_front_fraction`` (each axle's share equally

@@ -183,13 +183,15 @@ def test_preview_driver_on_the_circle_steers_its_curvature() -> None:
     radius, speed = 40.0, 12.0
     for direction in (1, -1):
         path = CirclePath(radius, direction)
-        driver = PreviewPathDriver(PathDriverSpec(), vehicle, path)
+        # yaw-rate feedback on: on the circle at r = U / R there is no shortfall to correct
+        driver = PreviewPathDriver(PathDriverSpec(yaw_rate_gain_s=0.3), vehicle, path)
         angle = 0.7  # any point of the circle, heading tangent
         cx, cy = path.centre
         x = cx + radius * math.cos(direction * (angle - math.pi / 2))
         y = cy + radius * math.sin(direction * (angle - math.pi / 2))
         delta = driver.steer(0.0, {"x_m": x, "y_m": y, "heading_rad": direction * angle,
-                                   "speed_mps": speed})
+                                   "speed_mps": speed, "yaw_rate_radps": direction * speed
+                                   / radius})
         expected = (vehicle.chassis.wheelbase_m
                     + vehicle.understeer_gradient_rad_per_mps2 * speed ** 2) / radius
         assert delta == pytest.approx(direction * expected, rel=1e-9)
