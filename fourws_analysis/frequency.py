@@ -357,16 +357,21 @@ class LinearSystem:
         return np.linalg.eigvals(self.A)
 
 
+#: Output names of :func:`fourws_analysis.linear.output_matrices` -> run channel names.
+_LINEAR_OUTPUTS = {"yaw_rate": "yaw_rate_radps", "lateral_acceleration": "lateral_accel_mps2",
+                   "sideslip": "sideslip_rad", "roll": "roll_rad",
+                   "lateral_velocity": "lateral_velocity_mps"}
+
+
 def linear_system(vehicle: Any, model_name: str, speed_mps: float, law: str = "fws",
                   belief_vehicle: Any = None, law_options: Mapping[str, Any] | None = None
                   ) -> LinearSystem:
     """Closed-loop linear model (``2dof`` or ``3dof``) of ``vehicle`` with rear-steer ``law``.
 
-    The law is closed analytically through its linear gains, ``delta_r = K_x x + K_u u``
-    (:meth:`fourws_control.base.Law.linear_gains`), so
-    ``A_cl = A + B_r K_x`` and ``b_cl = B_f + B_r K_u,f``. Outputs: yaw rate, lateral
-    acceleration ``a_y = dV/dt + U r``, sideslip ``beta = V/U`` (small angle), roll (3-DOF) and
-    the rear road-wheel angle.
+    Built by :func:`fourws_analysis.linear.closed_loop` (the law closed through its linear
+    gains, ``delta_r = K_x x + K_u u``, so ``A_cl = A + B_r K_x``, ``b_cl = B_f + B_r K_u,f``)
+    and :func:`fourws_analysis.linear.output_matrices` (yaw rate, ``a_y = dV/dt + U r``,
+    sideslip ``V/U``, roll), with the front road-wheel angle as the one input.
 
     Parameters
     ----------
@@ -380,40 +385,23 @@ def linear_system(vehicle: Any, model_name: str, speed_mps: float, law: str = "f
         Rear-steer law name (``fws`` = no rear steer).
     belief_vehicle : Vehicle, optional
         The vehicle the controller believes in (default: the true one).
+    law_options : mapping, optional
+        Options of the law (``make_law`` keywords).
 
     Raises
     ------
     UnknownNameError, IncompatibleError, ParameterError
         From the model and law registries.
     """
-    from fourws_sim.models import get_model
+    from fourws_analysis import linear
+    from fourws_control import make_law
 
-    mod = get_model(model_name)
-    A, B = mod.matrices(vehicle, speed_mps)
-    state = {m.name: int(m) for m in mod.STATE}
-    inp = {m.name: int(m) for m in mod.INPUT}
-    i_f, i_r = inp["DELTA_F"], inp["DELTA_R"]
-    n = A.shape[0]
-    k_x = np.zeros(n)
-    k_u = np.zeros(B.shape[1])
-    if law != "fws":
-        from fourws_control import make_law
-
-        ctrl = make_law(law, belief_vehicle if belief_vehicle is not None else vehicle,
-                        **dict(law_options or {}))
-        gains = ctrl.linear_gains(model_name, vehicle, speed_mps)
-        k_x = np.asarray(gains.K_x, dtype=float)
-        k_u = np.asarray(gains.K_u, dtype=float)
-    a_cl = A + np.outer(B[:, i_r], k_x)
-    b_cl = B[:, i_f] + B[:, i_r] * k_u[i_f]
-    e = np.eye(n)
-    v, r = state["V"], state["R"]
-    C = {"yaw_rate_radps": e[r], "sideslip_rad": e[v] / speed_mps,
-         "lateral_accel_mps2": a_cl[v] + speed_mps * e[r], "rear_wheel_angle_rad": k_x}
-    D = {"yaw_rate_radps": 0.0, "sideslip_rad": 0.0, "lateral_accel_mps2": float(b_cl[v]),
-         "rear_wheel_angle_rad": float(k_u[i_f])}
-    roll = next((state[k] for k in ("PHI", "ROLL") if k in state), None)
-    if roll is not None:
-        C["roll_rad"] = e[roll]
-        D["roll_rad"] = 0.0
-    return LinearSystem(f"{model_name} {law}", a_cl, b_cl, C, D)
+    law_obj = make_law(law, belief_vehicle if belief_vehicle is not None else vehicle,
+                       **dict(law_options or {}))
+    cl = linear.closed_loop(model_name, vehicle, law_obj, speed_mps)
+    i_f = list(cl.input_names).index("DELTA_F")
+    names, c_mat, d_mat = linear.output_matrices(cl)
+    C = {_LINEAR_OUTPUTS[n]: c_mat[k] for k, n in enumerate(names) if n in _LINEAR_OUTPUTS}
+    D = {_LINEAR_OUTPUTS[n]: float(d_mat[k, i_f]) for k, n in enumerate(names)
+         if n in _LINEAR_OUTPUTS}
+    return LinearSystem(f"{model_name} {law}", cl.A, cl.B[:, i_f], C, D)
