@@ -266,4 +266,27 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         maneuver=man.name, end_reason=end_reason, config=config)
 
 
-__all__ = ["ClosedLoopResult", "law_input_from", "run_closed_loop", "simulator_inputs"]
+def run_scenario(scenario: Any, law_name: str | None = None) -> ClosedLoopResult:
+    """Run one law of a :class:`fourws_sim.scenario.Scenario` offline (its first law by
+    default): the reference a lockstep run of the node graph with the same scenario matches.
+
+    Raises
+    ------
+    ParameterError
+        ``law_name`` is not one of the scenario's laws.
+    """
+    law = scenario.laws[0] if law_name is None else law_name
+    if law not in scenario.laws:
+        raise ParameterError("law", f"{law!r} is not in the scenario's laws "
+                             f"({', '.join(scenario.laws)})", scenario.source or scenario.name)
+    vehicle = scenario.build_vehicle()
+    return run_closed_loop(vehicle, scenario.maneuver, law, model=scenario.model,
+                           dt_s=scenario.integration_step_s,
+                           control_period_s=scenario.control_period_s,
+                           belief_vehicle=scenario.build_belief(vehicle),
+                           integrator=scenario.integrator,
+                           law_options=scenario.law_options.get(law))
+
+
+__all__ = ["ClosedLoopResult", "law_input_from", "run_closed_loop", "run_scenario",
+           "simulator_inputs"]

@@ -147,3 +147,47 @@ def test_constant_radius_converges_to_the_circle(car) -> None:
 def test_control_period_must_be_a_multiple_of_the_step(car) -> None:
     with pytest.raises(ParameterError, match="control_period_s"):
         run_closed_loop(car, "step_steer_85kmh", "fws", model="2dof", control_period_s=0.0105)
+
+
+def test_slow_ramp_is_quasi_steady_and_stops_at_the_lateral_limit(car) -> None:
+    """ISO 4138 slowly increasing steer on the linear 2-DOF. A ramp input drives a stable
+    linear system, once its transient has died, to r(t) = G(0) (delta(t) - tau ddelta/dt) with
+    the time lag tau = -G'(0)/G(0) = -C A^-2 B / (C A^-1 B) (first moment of the impulse
+    response), plus Tc/2 for the zero-order hold of the 10 ms control period; G(0) is the
+    steady-state gain U / (L + K U^2). The run ends when |a_y| reaches the limit."""
+    spec = load_maneuver_spec("slow_ramp_steer")
+    res = run_closed_loop(car, spec, "fws", model="2dof")
+    assert res.end_reason == "lateral acceleration limit reached"
+    u = spec.initial_speed_mps
+    mod = get_model("2dof")
+    A, B = mod.matrices(car, u)
+    c = np.zeros(len(mod.STATE))
+    c[mod.STATE.R] = 1.0
+    b = B[:, mod.INPUT.DELTA_F]
+    g0 = -c @ np.linalg.solve(A, b)
+    assert g0 == pytest.approx(u / (car.chassis.wheelbase_m
+                                    + car.understeer_gradient_rad_per_mps2 * u * u), rel=1e-9)
+    ainv_b = np.linalg.solve(A, b)
+    tau = -(c @ np.linalg.solve(A, ainv_b)) / (c @ ainv_b) + 0.5 * 0.01
+    rate = spec.params.rate_radps / car.steering.ratio  # road-wheel rad/s
+    t = res.time_s
+    ramping = t > spec.params.start_s + 3.0  # 3 s: the yaw transient (~0.1 s) has died
+    delta = res.driver["front_wheel_angle_rad"]
+    np.testing.assert_allclose(res["yaw_rate_radps"][ramping],
+                               g0 * (delta[ramping] - rate * tau), rtol=1e-3)
+    assert 0.0 < tau < 0.2  # quasi-steady: the lag is tiny against the 8 s ramp
+    assert abs(res["lateral_accel_mps2"][-1]) < spec.params.max_lateral_accel_mps2
+    assert abs(res.final_outputs["lateral_accel_mps2"]) >= spec.params.max_lateral_accel_mps2
+
+
+def test_run_scenario_is_run_closed_loop_with_the_scenario_settings(car) -> None:
+    from fourws_sim.closed_loop import run_scenario
+    from fourws_sim.scenario import load_scenario
+
+    scenario = load_scenario("default")
+    res = run_scenario(scenario, "sol1")
+    ref = run_closed_loop(car, scenario.maneuver, "sol1")
+    np.testing.assert_array_equal(res["yaw_rate_radps"], ref["yaw_rate_radps"])
+    assert res.config["control_period_s"] == scenario.control_period_s
+    with pytest.raises(ParameterError, match="law"):
+        run_scenario(scenario, "lqr")
