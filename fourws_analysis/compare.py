@@ -20,6 +20,7 @@ numerically at the run's straight-running trim) need the vehicle mapping of the 
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
@@ -39,6 +40,8 @@ SWEEP_SPEEDS_MPS = tuple(float(v) for v in np.arange(5.0, 40.01, 2.5))
 FR_INPUTS = ("front_wheel_angle_rad", "steering_wheel_angle_rad")
 
 Progress = Callable[[str], None]
+#: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options.
+_SWEEP_CACHE: dict[str, Any] = {}
 
 
 @dataclass
@@ -369,5 +372,10 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
                 lat = _lateral_modes(r)
                 arr[k, :lat.size] = lat
             return linearize.EigenSweep("8dof", np.asarray(SWEEP_SPEEDS_MPS), arr)
-        res.eig_sweep = _try(res, "eigenvalues_vs_speed", sweep)
+        key = json.dumps([vehicle.to_dict(), res.law,
+                          belief.to_dict() if belief is not None else None, dict(options)],
+                         sort_keys=True, default=str)
+        if key not in _SWEEP_CACHE:  # runs of one vehicle and law share their sweep
+            _SWEEP_CACHE[key] = _try(res, "eigenvalues_vs_speed", sweep)
+        res.eig_sweep = _SWEEP_CACHE[key]
     return res
