@@ -315,9 +315,9 @@ class DoubleLaneChangeParams:
     x in [49, 61], width 1.3 W + 0.25 but at least 3 m, its right edge in line with that of
     section 1. The reference path of the driver keeps y = ``entry_offset_m`` (negative: the
     right half of the entry lane, where a test driver sets up for a left lane change) through
-    section 1 up to ``turn_in_x_m``, blends (raised cosine) to ``side_lane_target_m`` above the section-3 right
-    edge by ``side_lane_reach_x_m``, holds it, blends back to the centre of section 5 from
-    ``return_x_m`` to ``return_reach_x_m`` (all knots relative to x0).
+    section 1 up to ``turn_in_x_m``, blends (raised cosine) to ``side_lane_target_m`` above the
+    section-3 right edge by ``side_lane_reach_x_m``, holds it, blends back to the centre of
+    section 5 from ``return_x_m`` to ``return_reach_x_m`` (all knots relative to x0).
     """
 
     vehicle_width_m: float = _spec(default=1.7)
