@@ -619,7 +619,17 @@ class Maneuver:
         return self.initial_speed_mps
 
     def command(self, t: float, outputs: Mapping[str, Any]) -> DriverCommand:
-        """Driver command at tick time ``t`` (s) from the vehicle outputs (stateful)."""
+        """Driver command at tick time ``t`` (s) from the vehicle outputs (stateful).
+
+        Parameters
+        ----------
+        t : float
+            Tick time in s (``VehicleState.sim_time_s``), increasing from call to call.
+        outputs : mapping
+            ``VehicleState`` fields; read here: ``speed_mps`` (all types), ``x_m``, ``y_m``,
+            ``heading_rad``, ``yaw_rate_radps`` (path-following types). :meth:`done` also
+            reads ``lateral_accel_mps2`` and ``sideslip_rad``.
+        """
         speed = float(outputs["speed_mps"])
         if self._path_driver is not None:
             front = self._path_driver.steer(t, outputs)
