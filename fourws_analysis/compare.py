@@ -293,8 +293,8 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
                 res.models[model] = sys_
         if vehicle.body is not None:
             sys8 = _try(res, "model_8dof_linearized",
-                        lambda: eightdof_linear_system(vehicle, speed, res.law, belief,
-                                                         options))
+                        lambda: eightdof_linear_system(vehicle, speed, res.law,
+                                                       belief, options))
             if sys8 is not None:
                 res.models["8dof-lin"] = sys8
 

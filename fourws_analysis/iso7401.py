@@ -178,8 +178,8 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
     yaw = out.get("yaw_rate_radps")
     if sideslip_rad is not None and yaw is not None and yaw.peak_response_time_s is not None:
         beta = np.asarray(sideslip_rad, dtype=float)
-        beta_ss = float(np.mean(beta[win])) - (float(np.mean(beta[base_idx]))
-                                                if np.any(base_idx) else float(beta[0]))
+        beta_0 = float(np.mean(beta[base_idx])) if np.any(base_idx) else float(beta[0])
+        beta_ss = float(np.mean(beta[win])) - beta_0
         tb = yaw.peak_response_time_s * abs(math.degrees(beta_ss))
     elif sideslip_rad is not None:
         notes.append("TB factor needs a yaw-rate peak response time")

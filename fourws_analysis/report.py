@@ -116,7 +116,8 @@ def plot_bode(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
                 lbl = f"{name} model" + (f" ({r.name})" if len(runs) > 1 else "")
                 # a model whose gain is zero (e.g. sideslip under a zero-sideslip law) would
                 # squash the axis to -300 dB: show it at the floor instead
-                ax_g.semilogx(f, np.maximum(model.gain_db, floor_db), style, color=mcolor if len(runs) == 1 else color,
+                line_color = mcolor if len(runs) == 1 else color
+                ax_g.semilogx(f, np.maximum(model.gain_db, floor_db), style, color=line_color,
                               lw=1.2, label=lbl)
                 ph = model.phase_deg
                 ax_p.semilogx(f, ph, style, color=mcolor if len(runs) == 1 else color, lw=1.2)
@@ -335,7 +336,8 @@ def _metrics_table(runs: Sequence[RunAnalysis]) -> str:
 _CSS = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1200px;color:#222}
 h1{font-size:1.5em}h2{font-size:1.15em;margin-top:1.8em;border-bottom:1px solid #ccc}
 table{border-collapse:collapse;font-size:.85em}td,th{border:1px solid #ddd;padding:3px 8px;
-text-align:right}td:first-child,th:first-child{text-align:left}tr:nth-child(even){background:#f7f7f7}
+text-align:right}td:first-child,th:first-child{text-align:left}
+tr:nth-child(even){background:#f7f7f7}
 img{max-width:100%;border:1px solid #eee;margin:.5em 0}.note{color:#775;font-size:.85em}"""
 
 
@@ -369,8 +371,8 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
              ("ISO 7401 step response", plot_step, "step.png", ""),
              ("ISO 4138 steady-state handling", plot_steady_state, "steady_state.png", ""),
              ("Stability: eigenvalues", plot_eigenvalues, "eigenvalues.png",
-              "One panel per law. Modes faster than -40 1/s (wheel spin, tire lag, actuator) are left "
-              "out; an eigenvalue right of the axis is an unstable mode."))
+              "One panel per law. Modes faster than -40 1/s (wheel spin, tire lag, actuator) "
+              "are left out; an eigenvalue right of the axis is an unstable mode."))
     if runs:
         # time histories: one figure per maneuver, so a 60 s sweep does not flatten a 5 s step
         groups: dict[str, list[RunAnalysis]] = {}

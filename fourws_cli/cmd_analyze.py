@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 import time
+from typing import Any
 
 from fourws_sim.errors import FourwsError
 
@@ -104,15 +105,17 @@ def run(args: argparse.Namespace) -> int:
     return 1 if failures else 0
 
 
-def _expected(metric: str, r: object) -> bool:
+def _expected(metric: str, r: Any) -> bool:
     """Metrics a maneuver is not meant to give are not worth a warning line."""
     return metric in ("frequency_response", "iso7401_step", "iso4138_steady_state")
 
 
-def _print_summary(r: object) -> None:
-    metrics = r.metrics()  # type: ignore[attr-defined]
-    print(f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}, "  # type: ignore
-          f"{metrics['speed_mps']:.1f} m/s" if metrics["speed_mps"] else f"{r.name}")  # type: ignore
+def _print_summary(r: Any) -> None:
+    """A few lines per run when neither --json nor --report is given."""
+    metrics = r.metrics()
+    speed = metrics["speed_mps"]
+    where = f", {speed:.1f} m/s" if speed else ""
+    print(f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}{where}")
     for key in ("frequency_response", "iso7401_step", "iso4138_steady_state",
                 "identified_modes"):
         if key in metrics:

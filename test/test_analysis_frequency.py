@@ -45,8 +45,9 @@ def test_swept_sine_bag_matches_analytic_bode(tmp_path: Path) -> None:
     vehicle = vehicle_from_mapping(SET_1)
     dt = 1.0 / 200.0
     t = np.arange(0.0, 60.0, dt)
+    # phi = -90 deg: the sweep starts from straight running
     delta = math.radians(1.0) * signal.chirp(t, 0.1, t[-1], 4.0, method="logarithmic",
-                                                   phi=-90.0)  # starts from straight running
+                                             phi=-90.0)
     state = simulate_2dof(vehicle, SPEED, t, delta)
     config = {"vehicle": SET_1, "maneuver": {"type": "swept_sine"}, "law": "fws",
               "model": "2dof", "speed_mps": SPEED}
