@@ -141,7 +141,10 @@ class Simulator:
             self._dx = np.zeros(eightdof.N_STATE)
             self._aux = np.zeros(eightdof.N_AUX)
             self._input_names = _field_names()
+            self._brakes: slice | None = slice(int(eightdof.INPUT.BRAKE_FL),
+                                               int(eightdof.INPUT.BRAKE_RR) + 1)
         else:
+            self._brakes = None
             if tire is not None:
                 raise ParameterError("tire", f"only the {EIGHT_DOF} model has a tire choice")
             self._input_names = [m.name for m in self.model.INPUT]
@@ -224,23 +227,24 @@ class Simulator:
         if isinstance(u, Inputs):
             arr = self._from_inputs(u)
         else:
-            arr = np.asarray(u, dtype=float).reshape(-1)
+            arr = np.array(u, dtype=np.float64).reshape(-1)  # a copy: the caller may reuse u
             if arr.shape[0] != self._n_input:
                 raise ParameterError("u", f"must have {self._n_input} components in "
                                      f"{self.model_name} INPUT order, got {arr.shape[0]}")
-        if not np.isfinite(arr).all():
-            bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-            raise NonFiniteError(f"input {self._input_names[bad]} is not finite "
-                                 f"({arr[bad]!r})")
-        if self._is_8dof:
-            from fourws_sim.models.eightdof import INPUT
-
-            brakes = arr[INPUT.BRAKE_FL:INPUT.BRAKE_RR + 1]
-            if (brakes < 0.0).any():
-                bad = int(INPUT.BRAKE_FL) + int(np.flatnonzero(brakes < 0.0)[0])
-                raise ParameterError(self._input_names[bad],
-                                     f"must be >= 0 (a brake only opposes spin), got "
-                                     f"{arr[bad]!r}")
+        # cheap checks on a Python list (this runs at every simulator tick); the precise
+        # search for the bad component only runs when one fails
+        values = arr.tolist()
+        if not math.isfinite(sum(values)):
+            finite = np.isfinite(arr)
+            if not finite.all():
+                bad = int(np.flatnonzero(~finite)[0])
+                raise NonFiniteError(f"input {self._input_names[bad]} is not finite "
+                                     f"({arr[bad]!r})")
+        if self._brakes is not None and min(values[self._brakes]) < 0.0:
+            bad = self._brakes.start + int(np.flatnonzero(arr[self._brakes] < 0.0)[0])
+            raise ParameterError(self._input_names[bad],
+                                 f"must be >= 0 (a brake only opposes spin), got "
+                                 f"{arr[bad]!r}")
         return arr
 
     def _from_inputs(self, u: Inputs) -> np.ndarray:
