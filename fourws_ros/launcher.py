@@ -667,6 +667,8 @@ def _drive_run(launcher: Launcher, node: Any, config_json: str, recorded: list[s
             state["events"].append(msg.event)
         if msg.done:
             state["done"] = True
+            state["sim_time_s"] = max(state["sim_time_s"], msg.header.stamp.sec
+                                      + msg.header.stamp.nanosec * 1e-9)
 
     def on_sim(msg: Any) -> None:
         if msg.sim_time_s > state["sim_time_s"]:

@@ -79,6 +79,8 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
+    from rclpy.exceptions import ParameterException
+
     from fourws_sim.errors import FourwsError
 
     flag = _StopFlag()
@@ -91,7 +93,8 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     try:
         try:
             node = factory()
-        except FourwsError as exc:
+        except (FourwsError, ParameterException) as exc:
+            # ParameterException: a --ros-args/-p value outside its descriptor's range or type
             print(f"[{name}] error: {exc}", file=sys.stderr, flush=True)
             return EXIT_USER_ERROR
         executor = make_executor()

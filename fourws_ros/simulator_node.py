@@ -108,6 +108,11 @@ class SimulatorNode(Node):
             description="lockstep: wait for this many /fourws/state subscribers before the "
                         "first tick", integer_range=[IntegerRange(from_value=0, to_value=64,
                                                                   step=1)], **ro))
+        self.declare_parameter("realtime_priority", 20, ParameterDescriptor(
+            description="realtime: SCHED_FIFO priority of the integration thread (1-99; 0 = "
+                        "normal scheduling). Needs CAP_SYS_NICE; without it the node warns "
+                        "and runs with normal priority", integer_range=[IntegerRange(
+                            from_value=0, to_value=99, step=1)], read_only=True))
         self.declare_parameter("recorder_window_ticks", 0, ParameterDescriptor(
             description="lockstep: run at most this many ticks ahead of the states the "
                         "recorder reports written (0 = no recorder flow control)",
@@ -159,6 +164,12 @@ class SimulatorNode(Node):
                                        "state_period_s")
         self.sim = Simulator(vehicle, model=self.model_name,
                              integrator=str(self._param("integrator")), dt_s=self.dt_s)
+        # compile the numba kernels now, not in the first (realtime) step
+        from fourws_sim.closed_loop import simulator_inputs
+        from fourws_sim.drivers import DriverCommand
+        self.sim.reset(speed_mps=float(self._cfg["initial_speed_mps"]))
+        self.sim.step(simulator_inputs(DriverCommand(0.0, 0.0), 0.0), n_steps=1)
+        self.sim.outputs()
         self.rear_limit_rad = float(vehicle.actuators.rear_angle_limit_rad)
 
     def _create_ros_interfaces(self) -> None:
@@ -437,6 +448,7 @@ class SimulatorNode(Node):
 
     # -- realtime
     def _realtime_loop(self) -> None:
+        _make_thread_realtime(int(self._param("realtime_priority")), self.get_logger())
         old_interval = sys.getswitchinterval()
         sys.setswitchinterval(_SWITCH_INTERVAL_S)
         try:
@@ -505,6 +517,25 @@ class SimulatorNode(Node):
         self._stop_rt_thread()
         if not self.stop_reason:
             self._publish_status(self.sim.time_s, running=False)
+
+
+def _make_thread_realtime(priority: int, logger: Any) -> None:
+    """SCHED_FIFO for the calling thread and 1 ns timer slack (sleep wakes on time)."""
+    import ctypes
+    import os
+
+    pr_set_timerslack = 29
+    try:
+        ctypes.CDLL(None).prctl(pr_set_timerslack, 1, 0, 0, 0)
+    except (OSError, AttributeError):
+        pass
+    if priority <= 0:
+        return
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except (PermissionError, OSError) as exc:
+        logger.warning(f"realtime priority {priority} not granted ({exc}); running with normal "
+                       "scheduling, expect more step lateness under load")
 
 
 def _whole_multiple(period_s: float, step_s: float, field: str) -> int:

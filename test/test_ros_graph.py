@@ -1,0 +1,170 @@
+"""End-to-end tests of the fourws node graph: real nodes, separate processes, isolated domain.
+
+Every run goes through :func:`fourws_ros.launcher.run_graph` (what ``fourws run`` does), which
+reserves its own ROS domain and limits discovery to this machine.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fourws_analysis.bag import TOPIC_TYPES as BAG_TOPIC_TYPES, load_bag
+from fourws_ros import topics
+from fourws_ros.launcher import run_graph
+from fourws_sim.closed_loop import run_closed_loop
+from fourws_sim.maneuvers import maneuver_spec_from_mapping
+from fourws_sim.scenario import load_scenario
+
+
+def _scenario(duration_s: float | None = None, **changes):
+    sc = load_scenario("default")
+    if duration_s is not None:
+        spec = sc.maneuver.to_dict()
+        spec["duration_s"] = duration_s
+        changes["maneuver"] = maneuver_spec_from_mapping(spec)
+    return dataclasses.replace(sc, **changes)
+
+
+@pytest.fixture(scope="module")
+def sol1_run(tmp_path_factory):
+    """The default scenario (ISO 7401 step steer, 85 km/h, table_8_1, 8-DOF) with sol1,
+    lockstep, through the real graph."""
+    sc = _scenario()
+    run = run_graph(sc, "sol1", tmp_path_factory.mktemp("graph"), run_name="sol1")
+    return sc, run
+
+
+def test_topic_names_agree_with_bag_reader():
+    # the offline reader (no rclpy) spells every graph topic and type the same way
+    for topic, msgtype in BAG_TOPIC_TYPES.items():
+        assert topics.TOPIC_TYPES[topic] == msgtype
+
+
+def test_lockstep_sol1_counts(sol1_run):
+    sc, run = sol1_run
+    assert run.ok, run.reason
+    ticks = int(round(sc.maneuver.duration_s / sc.control_period_s))  # 5 s / 10 ms = 500
+    viz_every = int(round(0.02 / sc.control_period_s))  # odom/imu at the 20 ms default
+    counts = run.message_counts
+    # one state per tick plus the final state (at t = duration the maneuver is done)
+    assert counts[topics.STATE] == ticks + 1
+    # every tick but the final one is answered by the maneuver and the controller
+    assert counts[topics.DRIVER_INPUT] == ticks
+    assert counts[topics.REAR_STEER_CMD] == ticks
+    assert counts[topics.ODOM] == counts[topics.IMU] == ticks // viz_every + 1
+    assert counts[topics.RUN_CONFIG] == 1
+    assert counts[topics.MANEUVER_STATUS] >= 1 and counts[topics.SIM_STATUS] >= 1
+    assert run.stale_commands == 0
+    assert math.isclose(run.sim_time_s, sc.maneuver.duration_s, abs_tol=sc.control_period_s)
+
+
+def test_lockstep_sol1_equals_offline_closed_loop(sol1_run):
+    sc, run = sol1_run
+    vehicle = sc.build_vehicle()
+    ref = run_closed_loop(vehicle, sc.maneuver, "sol1", model=sc.model,
+                          dt_s=sc.integration_step_s, control_period_s=sc.control_period_s,
+                          belief_vehicle=sc.build_belief(vehicle), integrator=sc.integrator)
+    bag = load_bag(run.bag_path)
+    state = bag.topics[topics.STATE]
+    n = ref.time_s.size
+    np.testing.assert_allclose(state.fields["sim_time_s"][:n], ref.time_s, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(state.fields["yaw_rate_radps"][:n], ref["yaw_rate_radps"],
+                               rtol=0, atol=1e-9)
+    assert abs(state.fields["yaw_rate_radps"][n] - ref.final_outputs["yaw_rate_radps"]) < 1e-9
+    np.testing.assert_allclose(bag.topics[topics.REAR_STEER_CMD].fields["angle_rad"],
+                               ref.rear_angle_rad, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(bag.topics[topics.DRIVER_INPUT].fields["front_wheel_angle_rad"],
+                               ref.driver["front_wheel_angle_rad"], rtol=0, atol=1e-15)
+    # the step steer really turned the car (yaw rate of ~0.1 rad/s, not a trivial zero run)
+    assert np.max(np.abs(ref["yaw_rate_radps"])) > 0.05
+    # the bag describes itself
+    assert bag.config["law"] == "sol1" and bag.maneuver == "step_steer"
+    assert bag.config["clock_mode"] == "lockstep"
+
+
+def test_realtime_run_records_at_configured_rate(tmp_path):
+    period = 0.005  # 200 Hz state
+    sc = _scenario(duration_s=3.0, clock_mode="realtime", state_period_s=period)
+    run = run_graph(sc, "sol1", tmp_path, run_name="rt")
+    assert run.ok, run.reason
+    state = load_bag(run.bag_path).topics[topics.STATE]
+    span = state.time_s[-1] - state.time_s[0]
+    rate_hz = (len(state) - 1) / span
+    assert abs(rate_hz - 1.0 / period) <= 0.02 / period
+    # paced by the wall clock: simulated time advances at real time (launcher's 50 ms polling
+    # over the 3 s run bounds the measurement error at ~2 %)
+    assert abs(run.realtime_factor - 1.0) < 0.05
+    assert run.overruns == 0
+
+
+def test_example_controller_replaces_builtin(tmp_path):
+    ratio = -0.2
+    sc = _scenario(duration_s=1.5)
+    run = run_graph(sc, "fws", tmp_path, run_name="example",
+                    controller=("example_controller", "fourws_controller"),
+                    node_overrides={"fourws_controller": {"rear_ratio": ratio}})
+    assert run.ok, run.reason
+    bag = load_bag(run.bag_path)
+    cmd = bag.topics[topics.REAR_STEER_CMD]
+    drv = bag.topics[topics.DRIVER_INPUT]
+    assert len(cmd) == len(drv) == int(round(1.5 / sc.control_period_s))
+    assert set(cmd.fields["law"]) == {"example_ratio"}
+    np.testing.assert_array_equal(cmd.time_s, drv.time_s)
+    np.testing.assert_allclose(cmd.fields["angle_rad"],
+                               ratio * drv.fields["front_wheel_angle_rad"], rtol=0, atol=1e-15)
+    # counter-phase rear steer was applied: the rear road-wheel angle of the last state
+    state = bag.topics[topics.STATE]
+    assert state.fields["rear_wheel_angle_rad"][-1] < -0.1 * abs(
+        drv.fields["front_wheel_angle_rad"][-1])
+
+
+def test_unknown_law_fails_with_reason(tmp_path):
+    run = run_graph(_scenario(duration_s=1.0), "no_such_law", tmp_path, run_name="bad")
+    assert not run.ok
+    assert "unknown law 'no_such_law'" in run.reason and "sol1" in run.reason
+    assert run.exit_codes["fourws_controller"] == 2
+
+
+def test_controller_crash_stops_run_and_keeps_bag(tmp_path):
+    def kill_controller(launcher):
+        launcher.child("fourws_controller").proc.send_signal(signal.SIGKILL)
+
+    run = run_graph(_scenario(duration_s=30.0), "sol1", tmp_path, run_name="crash",
+                    on_running=kill_controller)
+    assert not run.ok
+    assert "fourws_controller" in run.reason and "SIGKILL" in run.reason
+    # every other process is gone (no orphans) and the recorder closed a readable bag
+    assert all(code is not None for code in run.exit_codes.values())
+    assert run.exit_codes["fourws_recorder"] == 0
+    bag = load_bag(run.bag_path)
+    assert not bag.warnings
+    assert len(bag.topics[topics.STATE]) >= 1
+    assert all(np.isfinite(bag.topics[topics.STATE].fields["yaw_rate_radps"]))
+
+
+def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "fourws_cli.main", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_cli_run_rejects_malformed_scenario(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("vehicle: table_8_1\nmaneuver: step_steer_85kmh\nclock_mode: warp\n")
+    res = _cli("run", str(bad), "--out", str(tmp_path), cwd=tmp_path)
+    assert res.returncode == 2
+    assert "clock_mode" in res.stderr and str(bad) in res.stderr
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("vehicle: [table_8_1\n")
+    res = _cli("run", str(broken), cwd=tmp_path)
+    assert res.returncode == 2 and "not valid YAML" in res.stderr
+    res = _cli("run", "--law", "nope", cwd=tmp_path)
+    assert res.returncode == 2 and "unknown law 'nope'" in res.stderr
+    assert not any(tmp_path.glob("runs/*"))  # nothing was started
