@@ -138,7 +138,7 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         vy = -vxb * sd + vyb * cd
         avx = abs(vx)
         den = avx if avx > vmin else vmin
-        alpha = math.atan2(vy, den)
+        alpha = math.atan(vy / den)  # den > 0: atan2(vy, den) without the quadrant logic
         om = x[i_w0 + i]
         kappa = (om * rw - vx) / den
         if sigma > 0.0:
@@ -217,6 +217,7 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     aux[a_ax] = ax
     aux[a_ay] = ay
 
+
 @_jit
 def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
     """``n`` RK4 steps in place; returns the number of finite steps done."""
@@ -249,6 +250,7 @@ def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
         for j in range(N_STATE):
             x[j] = xt[j]
     return n
+
 
 @_jit
 def euler(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
