@@ -41,9 +41,9 @@ continuous stick law):
 * stuck band, :math:`I_w|\omega_i| < T_c \tau_b`:
   :math:`I_w\dot\omega_i = (T_o - \mathrm{clip}(T_o, -T_c, T_c)) - I_w\omega_i/\tau_b`:
   while the other torques stay within the capacity the brake holds the wheel and its spin
-  decays to zero (to :data:`HELD_SPIN_FLOOR_RADPS`; never through it: a brake cannot spin a wheel backwards, a locked wheel
-  stays exactly locked, a braked car at rest does not creep under a smaller drive torque);
-  torque beyond the capacity breaks the wheel loose.
+  decays to zero (down to :data:`HELD_SPIN_FLOOR_RADPS`, never through it): a brake cannot
+  spin a wheel backwards, a locked wheel stays locked, a braked car at rest does not creep
+  under a smaller drive torque; torque beyond the capacity breaks the wheel loose.
 
 :math:`\tau_b` = :data:`BRAKE_HOLD_TIME_S`. With :math:`T_c = 0` it is the free wheel.
 
