@@ -1,0 +1,290 @@
+"""Tests of single fourws nodes: recorder durability, parameter validation, simulator safety.
+
+In-process tests create the node in the test process (on a reserved ROS domain, discovery on
+this machine only); the recorder durability tests run it as its own process, to kill it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fourws_analysis.bag import load_bag
+from fourws_ros import conversions, topics
+
+pytestmark = pytest.mark.usefixtures("ros_domain")
+
+
+# ----------------------------------------------------------------------------- helpers
+@pytest.fixture
+def rclpy_context():
+    import rclpy
+    from rclpy.context import Context
+
+    ctx = Context()
+    rclpy.init(args=[], context=ctx)
+    try:
+        yield ctx
+    finally:
+        ctx.try_shutdown()
+
+
+def _spin_until(executor, predicate, timeout_s: float) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        executor.spin_once(timeout_sec=0.02)
+    return predicate()
+
+
+def _start_recorder(bag: Path, *extra: str) -> subprocess.Popen:
+    cmd = [sys.executable, "-m", "fourws_cli.main", "node", "recorder", "--ros-args",
+           "-p", f"bag_path:={bag}", *extra]
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+
+
+def _publish_states(n: int, rate_hz: float, ctx) -> None:
+    """Publish ``n`` VehicleState messages (step k, yaw rate k*1e-3, stamp k ms) at rate_hz."""
+    import rclpy
+
+    node = rclpy.create_node("state_source", context=ctx)
+    pub = node.create_publisher(topics.message_class(topics.STATE), topics.STATE,
+                                topics.STREAM_QOS)
+    deadline = time.monotonic() + 30.0
+    while pub.get_subscription_count() < 1 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert pub.get_subscription_count() >= 1, "recorder did not subscribe"
+    msg = topics.message_class(topics.STATE)()
+    t0 = time.perf_counter()
+    for k in range(n):
+        conversions.set_stamp(msg.header.stamp, k * 1e-3)
+        msg.step = k
+        msg.yaw_rate_radps = k * 1e-3
+        pub.publish(msg)
+        while time.perf_counter() - t0 < (k + 1) / rate_hz:
+            time.sleep(1e-4)
+    node.destroy_node()
+
+
+# ----------------------------------------------------------------------------- recorder
+def test_recorder_sigint_drains_and_finalizes(tmp_path, rclpy_context):
+    bag = tmp_path / "bag"
+    proc = _start_recorder(bag)
+    try:
+        _publish_states(2000, 2000.0, rclpy_context)
+        proc.send_signal(signal.SIGINT)  # at once: the recorder must drain its queue first
+        out, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 0, out
+    assert (bag / "metadata.yaml").is_file()
+    run = load_bag(bag)
+    state = run.topics[topics.STATE]
+    assert not run.warnings
+    assert len(state) == 2000
+    np.testing.assert_allclose(state.fields["yaw_rate_radps"], np.arange(2000) * 1e-3)
+    # bag times are the simulation stamps
+    np.testing.assert_allclose(state.time_s, np.arange(2000) * 1e-3, atol=1e-12)
+
+
+def test_recorder_sigkill_leaves_readable_bag(tmp_path, rclpy_context):
+    bag = tmp_path / "bag"
+    flush_s = 0.2
+    proc = _start_recorder(bag, "-p", f"flush_period_s:={flush_s}")
+    try:
+        _publish_states(500, 1000.0, rclpy_context)
+        time.sleep(5 * flush_s)  # several flushes after the last message
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == -signal.SIGKILL
+    assert not (bag / "metadata.yaml").exists()  # it really died before closing
+    run = load_bag(bag)
+    state = run.topics[topics.STATE]
+    assert len(state) == 500  # everything published a flush period before the kill
+    np.testing.assert_allclose(state.fields["yaw_rate_radps"], np.arange(500) * 1e-3)
+
+
+def test_stamp_parsing_matches_messages():
+    from rclpy.serialization import serialize_message
+
+    from fourws_ros.recorder_node import stamp_ns
+
+    msg = topics.message_class(topics.STATE)()
+    conversions.set_stamp(msg.header.stamp, 12.345678901)
+    assert stamp_ns(serialize_message(msg)) == 12_345_678_901
+    clock = conversions.clock_msg(3.5)
+    assert stamp_ns(serialize_message(clock)) == 3_500_000_000
+
+
+# ----------------------------------------------------------------------------- controller
+def test_controller_live_law_switch_is_validated(rclpy_context):
+    from rclpy.parameter import Parameter
+
+    from fourws_ros.controller_node import ControllerNode
+
+    node = _make_node(ControllerNode, rclpy_context)
+    try:
+        assert node.law_name == "fws"
+        bad = node.set_parameters([Parameter("law", value="no_such_law")])[0]
+        assert not bad.successful and "unknown law 'no_such_law'" in bad.reason
+        assert node.get_parameter("law").value == "fws" and node.law_name == "fws"
+        # out of the descriptor's range: rejected, running value kept
+        limit = node.get_parameter("angle_limit_rad").value
+        res = node.set_parameters([Parameter("angle_limit_rad", value=2.0)])[0]
+        assert not res.successful
+        assert node.get_parameter("angle_limit_rad").value == limit
+        res = node.set_parameters([Parameter("law_options_json", value="{not json")])[0]
+        assert not res.successful and "law_options_json" in res.reason
+        ok = node.set_parameters([Parameter("law", value="sol1")])[0]
+        assert ok.successful and node.law_name == "sol1"
+        # the new law is sol1 of the simulated car: same gains as the core builds
+        from fourws_control import make_law
+        np.testing.assert_array_equal(node.law.gains(23.6),
+                                      make_law("sol1", node.vehicle).gains(23.6))
+    finally:
+        node.destroy_node()
+
+
+def _make_node(cls, ctx, **params):
+    """Build a fourws node class in context ``ctx`` with parameter overrides."""
+    import rclpy
+    from rclpy.parameter import Parameter
+
+    original = rclpy.node.Node.__init__
+
+    def init(self, name, **kwargs):
+        kwargs.setdefault("context", ctx)
+        kwargs["parameter_overrides"] = [Parameter(k, value=v) for k, v in params.items()]
+        original(self, name, **kwargs)
+
+    rclpy.node.Node.__init__ = init
+    try:
+        return cls()
+    finally:
+        rclpy.node.Node.__init__ = original
+
+
+# ----------------------------------------------------------------------------- simulator
+class _Peer:
+    """A test node that answers the simulator like maneuver + controller would."""
+
+    def __init__(self, ctx):
+        import rclpy
+
+        self.node = rclpy.create_node("peer", context=ctx)
+        msg = topics.message_class
+        self.driver_pub = self.node.create_publisher(msg(topics.DRIVER_INPUT),
+                                                     topics.DRIVER_INPUT, topics.STREAM_QOS)
+        self.cmd_pub = self.node.create_publisher(msg(topics.REAR_STEER_CMD),
+                                                  topics.REAR_STEER_CMD, topics.STREAM_QOS)
+        self.states = []
+        self.status = []
+        self.node.create_subscription(msg(topics.STATE), topics.STATE, self.states.append,
+                                      topics.STREAM_QOS)
+        self.node.create_subscription(msg(topics.SIM_STATUS), topics.SIM_STATUS,
+                                      self.status.append, topics.STATUS_QOS)
+
+    def answer(self, state, rear_rad: float, front_rad: float = 0.01) -> None:
+        from fourws_sim.drivers import DriverCommand
+
+        self.driver_pub.publish(conversions.driver_msg(DriverCommand(front_rad * 16, front_rad),
+                                                       state.sim_time_s))
+        cmd = topics.message_class(topics.REAR_STEER_CMD)()
+        cmd.angle_rad = rear_rad
+        cmd.state_step = state.step
+        cmd.state_stamp = state.header.stamp
+        self.cmd_pub.publish(cmd)
+
+
+@pytest.fixture
+def lockstep_sim(rclpy_context):
+    from rclpy.executors import SingleThreadedExecutor
+
+    from fourws_ros.simulator_node import SimulatorNode
+
+    sim = _make_node(SimulatorNode, rclpy_context, command_timeout_s=0.3,
+                     expected_state_subscribers=1)
+    peer = _Peer(rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(sim)
+    executor.add_node(peer.node)
+    try:
+        yield sim, peer, executor
+    finally:
+        executor.shutdown()
+        sim.destroy_node()
+        peer.node.destroy_node()
+
+
+def test_simulator_rejects_bad_commands_and_times_out_to_zero(lockstep_sim):
+    sim, peer, executor = lockstep_sim
+    assert _spin_until(executor, lambda: len(peer.states) == 1, 20.0)
+    s0 = peer.states[0]
+    assert s0.step == 0 and s0.sim_time_s == 0.0
+    # a non-finite and an out-of-limit command are ignored: the simulator keeps waiting
+    peer.answer(s0, math.nan)
+    peer.answer(s0, 10 * sim.rear_limit_rad)
+    t_sent = time.monotonic()
+    assert _spin_until(executor, lambda: len(peer.states) == 2, 10.0)
+    waited = time.monotonic() - t_sent
+    assert waited >= 0.3 - 0.05  # only the command timeout released the tick
+    assert sim.stale_commands == 3  # two rejected + one timed-out tick
+    s1 = peer.states[1]
+    assert s1.step == sim.n_control
+    # zero rear steer was applied over the period (8-DOF applied rear angle = command + roll
+    # steer; roll is ~0 after 10 ms of a small steer)
+    assert abs(s1.rear_wheel_angle_rad) < 1e-4
+    # a valid answer advances at once; nothing non-finite was ever published
+    peer.answer(s1, 0.01)
+    assert _spin_until(executor, lambda: len(peer.states) == 3, 10.0)
+    for s in peer.states:
+        assert math.isfinite(s.yaw_rate_radps) and math.isfinite(s.speed_mps)
+
+
+def test_simulator_stops_on_non_finite_state(lockstep_sim):
+    from fourws_sim.errors import NonFiniteError
+
+    sim, peer, executor = lockstep_sim
+    assert _spin_until(executor, lambda: len(peer.states) == 1, 20.0)
+
+    def diverge(*_args, **_kwargs):
+        raise NonFiniteError("state component R is not finite (test)")
+
+    sim.sim.step = diverge
+    peer.answer(peer.states[0], 0.0)
+    assert _spin_until(executor, lambda: sim.finished, 10.0)
+    assert "non-finite" in sim.stop_reason and "R is not finite" in sim.stop_reason
+    assert _spin_until(executor, lambda: any(not s.running for s in peer.status), 5.0)
+    final = [s for s in peer.status if not s.running][-1]
+    assert final.stop_reason == sim.stop_reason
+    assert len(peer.states) == 1  # nothing after the failure
+
+
+def test_simulator_refuses_bad_configuration(rclpy_context):
+    from rclpy.exceptions import ParameterException
+
+    from fourws_ros.simulator_node import SimulatorNode
+    from fourws_sim.errors import ParameterError, UnknownNameError
+
+    with pytest.raises(UnknownNameError, match="unknown model 'warp'.*8dof"):
+        _make_node(SimulatorNode, rclpy_context, model="warp")
+    with pytest.raises(UnknownNameError, match="unknown tire 'slick'"):
+        _make_node(SimulatorNode, rclpy_context, tire="slick")
+    with pytest.raises(ParameterError, match="control_period_s.*whole multiple"):
+        _make_node(SimulatorNode, rclpy_context, control_period_s=0.0105)
+    with pytest.raises(ParameterException, match="integration_step_s"):
+        _make_node(SimulatorNode, rclpy_context, integration_step_s=5.0)
