@@ -17,6 +17,7 @@ setup(
         (f"share/{PACKAGE}/config/vehicles", glob("config/vehicles/*.yaml")),
         (f"share/{PACKAGE}/config/maneuvers", glob("config/maneuvers/*.yaml")),
         (f"share/{PACKAGE}/config/scenarios", glob("config/scenarios/*.yaml")),
+        (f"share/{PACKAGE}/config/params", glob("config/params/*.yaml")),
     ],
     install_requires=["setuptools", "numpy", "scipy", "pyyaml"],
     zip_safe=True,
@@ -27,6 +28,13 @@ setup(
     entry_points={
         "console_scripts": [
             "fourws = fourws_cli.main:main",
+            # one console script per node: `ros2 run fourws <node> --ros-args ...`
+            "simulator = fourws_ros.simulator_node:main",
+            "maneuver = fourws_ros.maneuver_node:main",
+            "controller = fourws_ros.controller_node:main",
+            "recorder = fourws_ros.recorder_node:main",
+            "replay = fourws_ros.replay_node:main",
+            "example_controller = fourws_ros.example_controller:main",
         ],
     },
 )
