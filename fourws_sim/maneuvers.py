@@ -567,6 +567,7 @@ class Maneuver:
         self._speed_driver = SpeedHoldDriver(spec.speed_hold, vehicle)
         self._path_driver: PreviewPathDriver | None = None
         self._random: np.ndarray | None = None
+        self._random_index = np.empty(0)
         self._hold_after_brake_mps: float | None = None
         self._aborted = ""
         if spec.type == "constant_radius":
