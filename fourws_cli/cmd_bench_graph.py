@@ -1,0 +1,98 @@
+"""``fourws bench-graph [--json]``: speed of the real node graph (lockstep and realtime).
+
+* lockstep: the default scenario's step steer stretched to ``--lockstep-seconds`` with law
+  ``sol1`` at 100 Hz control / 1 kHz RK4 integration, recorded — the real-time factor is
+  simulated time over the wall time of the running phase (start-up excluded).
+* realtime: the same maneuver for ``--realtime-seconds`` (default 60 s) at 1 kHz integration
+  with the state at 200 Hz — the simulator's step lateness (99th percentile and max, from its
+  histogram) and overruns, and the recorded state rate.
+
+The machine's load average is reported alongside: the graph shares the CPU with everything
+else running.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+HELP = "benchmark the ROS 2 node graph (lockstep real-time factor, realtime step lateness)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``fourws bench-graph``."""
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--lockstep-seconds", type=float, default=30.0,
+                        help="simulated duration of the lockstep run, s (default 30)")
+    parser.add_argument("--realtime-seconds", type=float, default=60.0,
+                        help="duration of the realtime run, s (default 60; 0 skips it)")
+    parser.add_argument("--state-rate-hz", type=float, default=200.0,
+                        help="realtime state rate, Hz (default 200)")
+    parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
+                        help="keep the runs (bags, logs) in DIR")
+
+
+def _scenario(duration_s: float, **changes):
+    from fourws_sim.maneuvers import maneuver_spec_from_mapping
+    from fourws_sim.scenario import load_scenario
+
+    sc = load_scenario("default")
+    spec = sc.maneuver.to_dict()
+    spec["duration_s"] = float(duration_s)
+    return dataclasses.replace(sc, maneuver=maneuver_spec_from_mapping(spec), **changes)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the benchmark; returns the exit code."""
+    from fourws_analysis.bag import load_bag
+    from fourws_ros import topics
+    from fourws_ros.launcher import run_graph
+
+    out = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="fourws-bench-"))
+    quiet = (lambda _text: None) if args.json else None
+    result: dict[str, object] = {"load_average_before": os.getloadavg()[0]}
+    ok = True
+    try:
+        lock = run_graph(_scenario(args.lockstep_seconds), "sol1", out, run_name="lockstep",
+                         echo=quiet)
+        ok &= lock.ok
+        result.update({
+            "lockstep_ok": lock.ok, "lockstep_sim_s": lock.sim_time_s,
+            "lockstep_wall_s": lock.wall_time_s,
+            "lockstep_realtime_factor": lock.realtime_factor,
+            "lockstep_ticks_per_s": lock.sim_time_s / 0.01 / max(lock.wall_time_s, 1e-9),
+            "lockstep_messages": sum(lock.message_counts.values()),
+        })
+        if args.realtime_seconds > 0:
+            period = 1.0 / args.state_rate_hz
+            rt = run_graph(_scenario(args.realtime_seconds, clock_mode="realtime",
+                                     state_period_s=period), "sol1", out, run_name="realtime",
+                           echo=quiet)
+            ok &= rt.ok
+            state = load_bag(rt.bag_path, topics=[topics.STATE]).topics[topics.STATE]
+            span = float(state.time_s[-1] - state.time_s[0]) if len(state) > 1 else 0.0
+            result.update({
+                "realtime_ok": rt.ok, "realtime_sim_s": rt.sim_time_s,
+                "realtime_wall_s": rt.wall_time_s,
+                "realtime_factor": rt.realtime_factor,
+                "realtime_p99_step_lateness_ms": rt.p99_lateness_s * 1e3,
+                "realtime_max_step_lateness_ms": rt.max_lateness_s * 1e3,
+                "realtime_overruns": rt.overruns,
+                "realtime_state_rate_hz": (len(state) - 1) / span if span > 0 else 0.0,
+                "realtime_state_messages": len(state),
+            })
+        result["load_average_after"] = os.getloadavg()[0]
+    finally:
+        if not args.keep:
+            shutil.rmtree(out, ignore_errors=True)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        for key, value in result.items():
+            print(f"{key:32s} {value:.4g}" if isinstance(value, float) else f"{key:32s} {value}")
+    return 0 if ok else 1
