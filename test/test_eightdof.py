@@ -400,3 +400,36 @@ def test_rk4_matches_solve_ivp_reference(vehicle: Vehicle) -> None:
     a, b = states
     scale = np.maximum(np.abs(b), 1e-3)
     assert np.max(np.abs(a - b) / scale) < 1e-6
+
+
+def test_brake_holds_a_car_at_rest_against_a_smaller_drive_torque(vehicle: Vehicle) -> None:
+    """Static friction of the brake: on the driven (rear) wheels, a drive torque below the
+    brake torque leaves the car exactly at rest; above it the wheels break loose and the car
+    moves off with the difference (Coulomb friction)."""
+    for drive, moves in ((600.0, False), (1400.0, True)):
+        sim = Simulator(vehicle)
+        sim.reset(speed_mps=0.0)
+        sim.step(Inputs(drive_torque_nm=(0.0, 0.0, drive, drive),
+                        brake_torque_nm=(0.0, 0.0, 1000.0, 1000.0)), 3000)
+        x = sim.state
+        if moves:
+            # net 2 x 400 N m at the rear wheels: about 800 / (R m) = 2.1 m/s^2 for 3 s
+            assert x[STATE.U] > 4.0
+        else:
+            assert np.all(x == 0.0)
+
+
+def test_linear_tire_variant_matches_the_2dof_with_table_5_1_stiffness(
+        vehicle: Vehicle) -> None:
+    """Tire override: with the linear tire (Table 5.1's Cf, Cr) and no roll steer the 8-DOF
+    gives the 2-DOF gain of those stiffnesses -- also proves the per-tire compiled variants
+    do not share code."""
+    v = variant(vehicle, roll__roll_steer_front=0.0, roll__roll_steer_rear=0.0)
+    sim = Simulator(v, tire="linear")
+    sim.reset(speed_mps=SPEED_85_MPS)
+    sim.step(Inputs(front_wheel_angle_rad=1.0e-3), 8000)
+    y = sim.outputs()
+    ref = linear_gain(linear2dof, v, y["speed_mps"])
+    assert y["yaw_rate_radps"] / 1.0e-3 == pytest.approx(ref, rel=0.01)
+    sti_gain, _, _ = steady_yaw_gain(variant(v, sti__g1=0.0, sti__k1=0.0))
+    assert abs(sti_gain / ref - 1.0) > 0.05  # the STI tire is a different tire

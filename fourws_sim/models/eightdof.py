@@ -34,16 +34,19 @@ Wheels (eqs. 8.5-8.8): :math:`I_w \dot\omega_i = T_{o,i} + T_{f,i}` with
 :math:`T_{o,i} = T_{d,i} - R F_{x,i}` (drive torque and tire force) and the friction torque
 of brake plus rolling resistance, capacity :math:`T_{c,i} = T_{b,i} + f_r F_{z,i} R`, in a
 stick-slip form that a fixed step integrates without chatter (Karnopp's friction model with a
-continuous stick law):
+stuck band and a continuous stick law):
 
 * sliding, :math:`I_w|\omega_i| \ge T_c \tau_b`:
   :math:`I_w\dot\omega_i = T_o - \mathrm{sign}(\omega_i) T_c` (Coulomb friction);
-* stuck band, :math:`I_w|\omega_i| < T_c \tau_b`:
-  :math:`I_w\dot\omega_i = (T_o - \mathrm{clip}(T_o, -T_c, T_c)) - I_w\omega_i/\tau_b`:
-  while the other torques stay within the capacity the brake holds the wheel and its spin
-  decays to zero (down to :data:`HELD_SPIN_FLOOR_RADPS`, never through it): a brake cannot
-  spin a wheel backwards, a locked wheel stays locked, a braked car at rest does not creep
-  under a smaller drive torque; torque beyond the capacity breaks the wheel loose.
+* stuck band, :math:`I_w|\omega_i| < T_c \tau_b`, with :math:`|T_o| \le T_c`: held,
+  :math:`\dot\omega_i = -(\omega_i/\tau_b)(1 - |T_o|/T_c)` -- the spin decays to zero (down to
+  :data:`HELD_SPIN_FLOOR_RADPS`, never through it): a brake cannot spin a wheel backwards,
+  a locked wheel stays locked, a braked car at rest does not creep under a smaller drive
+  torque;
+* stuck band with :math:`|T_o| > T_c`: breaking loose,
+  :math:`I_w\dot\omega_i = T_o - \mathrm{sign}(T_o) T_c`. The factor :math:`1 - |T_o|/T_c`
+  (the friction reserve) makes the two continuous at :math:`|T_o| = T_c`, so a wheel at the
+  breakaway threshold does not chatter between holding and slipping.
 
 :math:`\tau_b` = :data:`BRAKE_HOLD_TIME_S`. With :math:`T_c = 0` it is the free wheel.
 
@@ -64,6 +67,9 @@ regularized denominator (:data:`V_MIN_DEFAULT_MPS`, see :func:`params_for`):
 
 At rest both are exactly 0, so a car at rest with no input stays at rest; below
 :math:`v_{min}` the tires act as stiff viscous dampers, which brings the car to rest smoothly.
+The price: a tire has no static friction, so a car held only by locked wheels against a
+force F per tire creeps at :math:`F v_{min}/C_s` (7 cm/s for 1.4 kN on table_8_1's front
+tires; a car held by the brakes of its driven wheels does not move at all).
 
 Tire forces :math:`(F_x, F_y, M_z)` come from the vehicle's tire model in the wheel frame and
 are rotated by the road-wheel angle into the body frame; aligning moments add to the yaw
@@ -518,10 +524,13 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     cap = np.maximum(u[I.BRAKE_FL:I.BRAKE_RR + 1], 0.0) + q[P.F_RR] * fz * rw
     t_other = u[I.DRIVE_FL:I.DRIVE_RR + 1] - rw * fx
     sliding = iw * np.abs(omega) >= cap * q[P.TAU_B]
-    held_decay = np.where(np.abs(omega) > HELD_SPIN_FLOOR_RADPS, omega / q[P.TAU_B], 0.0)
-    omegad = np.where(sliding,
-                      (t_other - np.sign(omega) * cap) / iw,
-                      (t_other - np.clip(t_other, -cap, cap)) / iw - held_decay)
+    held = ~sliding & (np.abs(t_other) <= cap)
+    with np.errstate(divide="ignore", invalid="ignore"):  # cap > 0 wherever 'held'
+        reserve = 1.0 - np.abs(t_other) / cap
+    held_decay = np.where(np.abs(omega) > HELD_SPIN_FLOOR_RADPS,
+                          -omega / q[P.TAU_B] * reserve, 0.0)
+    friction_sign = np.where(sliding, np.sign(omega), np.sign(t_other))
+    omegad = np.where(held, held_decay, (t_other - friction_sign * cap) / iw)
 
     ax = ud - V * r
     ay = vd + U * r

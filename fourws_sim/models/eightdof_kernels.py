@@ -168,16 +168,14 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
             elif om < 0.0:
                 t_other += cap
             dx[i_w0 + i] = t_other / iw
-        else:  # stuck band: held, only torque beyond the capacity moves the wheel
-            if t_other > cap:
-                excess = t_other - cap
-            elif t_other < -cap:
-                excess = t_other + cap
-            else:
-                excess = 0.0
-            if abs(om) > HELD_FLOOR:
-                excess -= iw * om / q[k_tb]
-            dx[i_w0 + i] = excess / iw
+        elif t_other > cap:  # stuck band, breaking loose forwards
+            dx[i_w0 + i] = (t_other - cap) / iw
+        elif t_other < -cap:  # stuck band, breaking loose backwards
+            dx[i_w0 + i] = (t_other + cap) / iw
+        elif abs(om) > HELD_FLOOR:  # stuck band, held: the spin decays to zero
+            dx[i_w0 + i] = -om / q[k_tb] * (1.0 - abs(t_other) / cap)
+        else:
+            dx[i_w0 + i] = 0.0
         aux[a_fz + i] = fz
         aux[a_al + i] = alpha_t
         aux[a_ka + i] = kappa
