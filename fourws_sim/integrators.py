@@ -8,7 +8,7 @@ over the interval (zero-order hold, the way a simulator node applies its latest 
     x_next = integ.advance(f, t, x, u, p, dt_s=1e-3, n_steps=10)
 
 The 8-DOF simulator also has compiled versions of ``rk4`` and ``euler``
-(:func:`fourws_sim.models.eightdof.make_kernels`); :attr:`Integrator.compiled_name` names the
+(:func:`fourws_sim.models.eightdof.kernels_for`); :attr:`Integrator.compiled_name` names the
 kernel a compiled model should use, ``None`` for ``solve_ivp``.
 """
 

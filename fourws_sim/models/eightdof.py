@@ -97,7 +97,7 @@ model leaves out and removes the algebraic loop between loads, tire forces and a
 Loads are clamped at 0 (a lifted wheel has no force).
 
 Rolling resistance (``tire.rolling_resistance`` :math:`f_r`, default 0) is a torque
-:math:`f_r F_z R` opposing wheel spin (part of the clamped friction torque above).
+:math:`f_r F_z R` opposing wheel spin (part of the stick-slip friction torque above).
 
 Two implementations: :func:`derivatives` is the readable NumPy reference (the model contract);
 :func:`kernels_for` gives the numba-compiled right-hand side and fixed-step integrator loops
