@@ -9,7 +9,9 @@ disk-cached) variant with the tire function inlined.
 
 from __future__ import annotations
 
+import hashlib
 import math
+from pathlib import Path
 from typing import Any
 
 import numba
@@ -29,7 +31,24 @@ TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
 #: ``x * 0.0`` to 0 in the finiteness test, so a diverging state would go unnoticed.
 JIT_OPTIONS: dict[str, Any] = {"error_model": "numpy"}
 
-_tire = numba.njit(cache=True, **JIT_OPTIONS)(get_tire(TIRE_NAME).forces)
+_TIRE_MODULE = get_tire(TIRE_NAME)
+_tire = numba.njit(cache=True, **JIT_OPTIONS)(_TIRE_MODULE.forces)
+
+
+def _source_digest() -> str:
+    """Short hash of the sources this variant's compiled code depends on besides this file:
+    the model module (state/input/parameter slots are frozen in as constants) and the tire
+    module (its code is linked in). numba only checks the stamp of the function's own file,
+    so without this an edited tire or model would silently run from a stale cache."""
+    from fourws_sim.models import eightdof
+
+    digest = hashlib.sha1()
+    for module in (eightdof, _TIRE_MODULE):
+        digest.update(Path(module.__file__).read_bytes())  # type: ignore[arg-type]
+    return digest.hexdigest()[:12]
+
+
+_VARIANT = f"{TIRE_NAME}_{_source_digest()}"
 
 
 def _jit(func: Any) -> Any:
@@ -37,10 +56,12 @@ def _jit(func: Any) -> Any:
 
     numba names its cache files after the source file and the function's qualified name and
     does not key them on globals, so each variant gets its own qualified name
-    (``rhs_sti``, ...) -- otherwise the variants would share (and load) one cache entry.
+    (``rhs_sti_<digest>``, ...) -- otherwise the variants would share (and load) one cache
+    entry, and an edit of the tire or model module would not invalidate it.
     """
-    func.__qualname__ = f"{func.__name__}_{TIRE_NAME}"
+    func.__qualname__ = f"{func.__name__}_{_VARIANT}"
     return numba.njit(cache=True, **JIT_OPTIONS)(func)
+
 
 # plain int slots: numba freezes module-level ints as compile-time constants
 i_u, i_v, i_r, i_phi, i_p = (int(STATE.U), int(STATE.V), int(STATE.R), int(STATE.PHI),
