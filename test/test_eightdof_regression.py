@@ -1,7 +1,7 @@
 """Regression pin of the 8-DOF model and its tires (pre-optimization outputs).
 
 Source of every number in this file: the model's own earlier output. The trajectories and tire
-forces below were computed with the code of commit 7079d48 (before the speed work on the
+forces below were computed with the code of commit ecad847 (before the speed work on the
 compiled kernels and the tires) and are pinned here so that a change meant to be a pure
 speed-up (algebraic restructuring, compiler options) is proved to leave the results unchanged
 to round-off. The physics behind these numbers is tested elsewhere (``test_eightdof.py``,
