@@ -41,7 +41,7 @@ from typing import Any
 from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetParametersResult)
 from rclpy.node import Node
 
-from fourws_ros import conversions, topics
+from fourws_ros import cdr, conversions, topics
 from fourws_sim.errors import FourwsError, ParameterError
 
 #: Longest rear-angle limit a parameter may set, rad (45 deg: beyond any rear-steer hardware).
@@ -99,10 +99,12 @@ class ControllerNode(Node):
 
         self.pub = self.create_publisher(topics.message_class(topics.REAR_STEER_CMD),
                                          topics.REAR_STEER_CMD, topics.STREAM_QOS)
+        # raw subscriptions + fourws_ros.cdr: the answer chain of lockstep runs stays short
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
-                                 self._on_state, topics.STREAM_QOS)
+                                 self._on_state, topics.STREAM_QOS, raw=True)
         self.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
-                                 self._on_driver, topics.STREAM_QOS)
+                                 self._on_driver, topics.STREAM_QOS, raw=True)
+        self._cmd_msg = topics.message_class(topics.REAR_STEER_CMD)()
         self._state: Any = None
         self._state_rx = 0.0
         self._driver: dict[int, float] = {}  # stamp ns -> front road-wheel angle, rad
@@ -146,7 +148,7 @@ class ControllerNode(Node):
     def vehicle_speed_hint(self) -> float:
         """Speed used to try a new law's gain design, m/s (the last state's, else 20)."""
         state = getattr(self, "_state", None)
-        return float(state.speed_mps) if state is not None else 20.0
+        return float(state["speed_mps"]) if state is not None else 20.0
 
     def _on_set(self, params: list[Any]) -> SetParametersResult:
         changed = {p.name: p.value for p in params if p.name in self._BUILD_PARAMS}
@@ -164,18 +166,25 @@ class ControllerNode(Node):
         return SetParametersResult(successful=True)
 
     # ------------------------------------------------------------------ handshake
-    def _on_state(self, msg: Any) -> None:
-        self._state = msg
+    def _on_state(self, raw: bytes) -> None:
+        try:
+            self._state = cdr.parse_state(raw)
+        except cdr.CdrError as exc:
+            self.get_logger().error(f"ignored state: {exc}", throttle_duration_sec=1.0)
+            return
         self._state_rx = time.monotonic()
         self._try_answer(fallback=False)
 
-    def _on_driver(self, msg: Any) -> None:
+    def _on_driver(self, raw: bytes) -> None:
         try:
-            cmd = conversions.driver_command(msg)
-        except FourwsError as exc:
-            self.get_logger().error(f"ignored driver input: {exc}")
+            key, cmd = cdr.parse_driver_input(raw)
+        except cdr.CdrError as exc:
+            self.get_logger().error(f"ignored driver input: {exc}", throttle_duration_sec=1.0)
             return
-        key = conversions.stamp_to_ns(msg.header.stamp)
+        if not math.isfinite(cmd.front_wheel_angle_rad):
+            self.get_logger().error("ignored driver input: front_wheel_angle_rad is not finite",
+                                    throttle_duration_sec=1.0)
+            return
         self._driver[key] = cmd.front_wheel_angle_rad
         self._last_front = cmd.front_wheel_angle_rad
         if len(self._driver) > topics.STREAM_DEPTH:
@@ -191,7 +200,7 @@ class ControllerNode(Node):
         state = self._state
         if state is None:
             return
-        key = conversions.stamp_to_ns(state.header.stamp)
+        key = state["stamp_ns"]
         front = self._driver.pop(key, None)
         if front is None:
             if not fallback:
@@ -199,19 +208,20 @@ class ControllerNode(Node):
             front = self._last_front
             self.fallbacks += 1
             self.get_logger().warning(
-                f"no driver input for state step {state.step}; used the latest "
+                f"no driver input for state step {state['step']}; used the latest "
                 f"({self.fallbacks} fallbacks)", throttle_duration_sec=1.0)
         # drop driver inputs older than this tick
         for old in [k for k in self._driver if k < key]:
             del self._driver[old]
         self._state = None
         try:
-            raw = self.law.rear_angle(conversions.law_input(state, front))
-            angle = self.actuator.apply(raw, self.dt_s)
-            self.pub.publish(conversions.rear_cmd_msg(angle, 0.0, self.law_name, state))
+            law_cmd = self.law.rear_angle(conversions.law_input_from_outputs(state, front))
+            angle = self.actuator.apply(law_cmd, self.dt_s)
+            self.pub.publish(conversions.rear_cmd_msg(angle, 0.0, self.law_name, key,
+                                                      state["step"], self._cmd_msg))
         except FourwsError as exc:
             # never publish a non-finite command: the simulator times out to zero rear steer
-            self.get_logger().error(f"no command for step {state.step}: {exc}",
+            self.get_logger().error(f"no command for step {state['step']}: {exc}",
                                     throttle_duration_sec=1.0)
 
 

@@ -67,7 +67,8 @@ def outputs_finite(outputs: Mapping[str, Any]) -> str:
             total += float(outputs[key])
     for key in STATE_WHEELS:
         if key in outputs:
-            total += float(np.sum(outputs[key]))
+            value = outputs[key]
+            total += float(value.sum() if isinstance(value, np.ndarray) else sum(value))
     if math.isfinite(total):
         return ""
     for key in STATE_SCALARS:
@@ -120,6 +121,20 @@ def state_to_outputs(msg: Any) -> dict[str, Any]:
     out["sim_time_s"] = float(msg.sim_time_s)
     out["step"] = int(msg.step)
     return out
+
+
+def law_input_from_outputs(outputs: Any, delta_f_rad: float) -> Any:
+    """:class:`fourws_control.LawInput` from an outputs mapping (or
+    :func:`fourws_ros.cdr.parse_state` result) and the driver's front angle of the tick —
+    the same values, in the same fields, as :func:`fourws_sim.closed_loop.law_input_from`."""
+    from fourws_control import LawInput
+
+    return LawInput(delta_f_rad=float(delta_f_rad), speed_mps=float(outputs["speed_mps"]),
+                    yaw_rate_radps=float(outputs["yaw_rate_radps"]),
+                    roll_rad=float(outputs["roll_rad"]),
+                    roll_rate_radps=float(outputs["roll_rate_radps"]),
+                    lateral_velocity_mps=float(outputs["lateral_velocity_mps"]),
+                    time_s=float(outputs["sim_time_s"]))
 
 
 def law_input(msg: Any, delta_f_rad: float | None = None) -> Any:
@@ -194,22 +209,23 @@ def check_finite_mapping(values: Mapping[str, Any], what: str) -> None:
 
 
 # ---------------------------------------------------------------------------- rear steer
-def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state: Any,
-                 msg: Any = None) -> Any:
-    """``RearSteerCommand`` answering ``state`` (a ``VehicleState``)."""
+def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state_stamp_ns: int,
+                 state_step: int, msg: Any = None) -> Any:
+    """``RearSteerCommand`` answering the state stamped ``state_stamp_ns`` (ns) with step
+    ``state_step``."""
     from fourws_msgs.msg import RearSteerCommand
 
     if not (math.isfinite(angle_rad) and math.isfinite(rate_radps)):
         raise NonFiniteError(f"rear steer command of law {law} is not finite "
                              f"(angle {angle_rad!r}, rate {rate_radps!r})")
     m = RearSteerCommand() if msg is None else msg
-    m.header.stamp = state.header.stamp
+    m.header.stamp.sec, m.header.stamp.nanosec = divmod(int(state_stamp_ns), NS_PER_S)
     m.header.frame_id = "base_link"
     m.angle_rad = float(angle_rad)
     m.rate_radps = float(rate_radps)
     m.law = law
-    m.state_stamp = state.header.stamp
-    m.state_step = int(state.step)
+    m.state_stamp.sec, m.state_stamp.nanosec = divmod(int(state_stamp_ns), NS_PER_S)
+    m.state_step = int(state_step)
     return m
 
 

@@ -25,8 +25,12 @@ from typing import Any
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 
-from fourws_ros import conversions, topics
+from fourws_ros import cdr, conversions, topics
 from fourws_sim.errors import FourwsError, ParameterError
+
+
+#: Progress status every this many integration steps (0.1 s at 1 kHz), besides phase events.
+STATUS_EVERY_STEPS = 100
 
 
 class ManeuverNode(Node):
@@ -58,17 +62,19 @@ class ManeuverNode(Node):
                                                 topics.DRIVER_INPUT, topics.STREAM_QOS)
         self.status_pub = self.create_publisher(topics.message_class(topics.MANEUVER_STATUS),
                                                 topics.MANEUVER_STATUS, topics.STATUS_QOS)
+        # raw: the fast decoder keeps the lockstep answer chain short (fourws_ros.cdr)
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
-                                 self._on_state, topics.STREAM_QOS)
+                                 self._on_state, topics.STREAM_QOS, raw=True)
         self._driver_msg = topics.message_class(topics.DRIVER_INPUT)()
         self._phase = ""
         self._done = False
         self.get_logger().info(f"maneuver {self.maneuver.name} "
                                f"({self.maneuver.spec.type}, {self.maneuver.duration_s} s)")
 
-    def _status(self, state: Any, phase: str, progress: float, done: bool, event: str) -> None:
+    def _status(self, stamp_ns: int, phase: str, progress: float, done: bool,
+                event: str) -> None:
         msg = topics.message_class(topics.MANEUVER_STATUS)()
-        msg.header.stamp = state.header.stamp
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, conversions.NS_PER_S)
         msg.maneuver = self.maneuver.name
         msg.phase = phase
         msg.progress = float(progress)
@@ -76,15 +82,20 @@ class ManeuverNode(Node):
         msg.event = event
         self.status_pub.publish(msg)
 
-    def _on_state(self, state: Any) -> None:
+    def _on_state(self, raw: bytes) -> None:
         if self._done:
             return
-        t = float(state.sim_time_s)
-        outputs = conversions.state_to_outputs(state)
+        try:
+            outputs = cdr.parse_state(raw)
+        except cdr.CdrError as exc:
+            self.get_logger().error(f"ignored state: {exc}", throttle_duration_sec=1.0)
+            return
+        t = outputs["sim_time_s"]
+        stamp = outputs["stamp_ns"]
         if self.maneuver.done(t, outputs):
             self._done = True
             reason = self.maneuver.abort_reason
-            self._status(state, "done", self.maneuver.progress(t), True,
+            self._status(stamp, "done", self.maneuver.progress(t), True,
                          f"done: {reason}" if reason else "done")
             self.get_logger().info(f"maneuver done at t = {t:.3f} s {reason}")
             return
@@ -93,13 +104,13 @@ class ManeuverNode(Node):
             self.driver_pub.publish(conversions.driver_msg(cmd, t, self._driver_msg))
         except FourwsError as exc:
             self._done = True
-            self._status(state, "done", self.maneuver.progress(t), True, f"abort: {exc}")
+            self._status(stamp, "done", self.maneuver.progress(t), True, f"abort: {exc}")
             self.get_logger().error(f"maneuver aborted: {exc}")
             return
         phase = self.maneuver.phase(t)
         event = f"phase {phase}" if phase != self._phase else ""
-        if event or state.step % 100 == 0:
-            self._status(state, phase, self.maneuver.progress(t), False, event)
+        if event or outputs["step"] % STATUS_EVERY_STEPS == 0:
+            self._status(stamp, phase, self.maneuver.progress(t), False, event)
         self._phase = phase
 
 

@@ -46,7 +46,7 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
                                 SetParametersResult)
 from rclpy.node import Node
 
-from fourws_ros import conversions, topics
+from fourws_ros import cdr, conversions, topics
 from fourws_sim.errors import FourwsError, NonFiniteError, ParameterError, UnknownNameError
 
 CLOCK_MODES = ("lockstep", "realtime")
@@ -184,12 +184,13 @@ class SimulatorNode(Node):
         self.imu_pub = self.create_publisher(msg(topics.IMU), topics.IMU, topics.STREAM_QOS)
         self.status_pub = self.create_publisher(msg(topics.SIM_STATUS), topics.SIM_STATUS,
                                                 topics.STATUS_QOS)
+        # raw + fourws_ros.cdr: short lockstep answer chain
         self.driver_sub = self.create_subscription(msg(topics.DRIVER_INPUT),
                                                    topics.DRIVER_INPUT, self._on_driver,
-                                                   topics.STREAM_QOS)
+                                                   topics.STREAM_QOS, raw=True)
         self.cmd_sub = self.create_subscription(msg(topics.REAR_STEER_CMD),
                                                 topics.REAR_STEER_CMD, self._on_cmd,
-                                                topics.STREAM_QOS)
+                                                topics.STREAM_QOS, raw=True)
         self.create_subscription(msg(topics.RECORDER_PROGRESS), topics.RECORDER_PROGRESS,
                                  self._on_recorder_progress, topics.STATUS_QOS)
         self.recorder_window = int(self._param("recorder_window_ticks"))
@@ -245,29 +246,39 @@ class SimulatorNode(Node):
         self._started = False
 
     # ------------------------------------------------------------------ inputs
-    def _on_driver(self, msg: Any) -> None:
+    def _on_driver(self, raw: bytes) -> None:
         try:
-            cmd = conversions.driver_command(msg)
-        except NonFiniteError as exc:
+            stamp, cmd = cdr.parse_driver_input(raw)
+            if not math.isfinite(sum(cmd.drive_torque_nm) + sum(cmd.brake_torque_nm)
+                                 + cmd.front_wheel_angle_rad + cmd.steering_torque_nm
+                                 + cmd.steering_wheel_angle_rad):
+                conversions.check_finite_mapping(cmd.to_dict(), "driver input")
+        except (cdr.CdrError, NonFiniteError) as exc:
             self.get_logger().error(f"ignored driver input: {exc}", throttle_duration_sec=1.0)
             return
         self.driver = cmd
-        self.driver_stamp_ns = conversions.stamp_to_ns(msg.header.stamp)
+        self.driver_stamp_ns = stamp
         if self._awaiting is not None:
             self._lockstep_try_advance()
 
-    def _on_cmd(self, msg: Any) -> None:
-        angle = float(msg.angle_rad)
+    def _on_cmd(self, raw: bytes) -> None:
+        try:
+            msg = cdr.parse_rear_steer_command(raw)
+        except cdr.CdrError as exc:
+            self.get_logger().error(f"ignored rear-steer command: {exc}",
+                                    throttle_duration_sec=1.0)
+            return
+        angle = msg["angle_rad"]
         if not math.isfinite(angle) or abs(angle) > self.rear_limit_rad * (1.0 + 1e-12):
             self.stale_commands += 1
             self.get_logger().error(
-                f"ignored rear-steer command {angle!r} rad from law {msg.law!r}: "
+                f"ignored rear-steer command {angle!r} rad from law {msg['law']!r}: "
                 f"{'not finite' if not math.isfinite(angle) else 'beyond the rear angle limit'}"
                 f" ({self.rear_limit_rad} rad)", throttle_duration_sec=1.0)
             return
         self.rear_cmd_rad = angle
-        self.rear_cmd_step = int(msg.state_step)
-        self.rear_cmd_time_s = conversions.stamp_to_s(msg.state_stamp)
+        self.rear_cmd_step = msg["state_step"]
+        self.rear_cmd_time_s = msg["state_stamp_ns"] * 1e-9
         if self._awaiting is not None:
             self._lockstep_try_advance()
 
@@ -401,10 +412,9 @@ class SimulatorNode(Node):
 
         u = simulator_inputs(self.driver, rear_rad)
         try:
+            # the simulator raises on a non-finite state; derived outputs are checked when
+            # the state message is built (conversions.state_msg)
             self.sim.step(u, n_steps=n_steps)
-            bad = conversions.outputs_finite(self.sim.outputs())
-            if bad:
-                raise NonFiniteError(f"{bad} is not finite")
         except FourwsError as exc:
             self._stop(f"non-finite state at t = {self.sim.time_s:.4f} s: {exc}")
             return False
@@ -493,8 +503,13 @@ class SimulatorNode(Node):
                 if k % self.n_state == 0:
                     outputs = self.sim.outputs()
                     t = float(outputs.get("sim_time_s", self.sim.time_s))
-                    state = conversions.state_msg(outputs, time_s=t, step=self.step_count,
-                                                  model=self.model_name, msg=self._state_msg)
+                    try:
+                        state = conversions.state_msg(outputs, time_s=t, step=self.step_count,
+                                                      model=self.model_name,
+                                                      msg=self._state_msg)
+                    except NonFiniteError as exc:
+                        self._stop(f"non-finite state: {exc}")
+                        return
                     self.state_pub.publish(state)
                     self.clock_pub.publish(conversions.clock_msg(t, self._clock_msg))
                     self._publish_side(state, t)

@@ -288,3 +288,38 @@ def test_simulator_refuses_bad_configuration(rclpy_context):
         _make_node(SimulatorNode, rclpy_context, control_period_s=0.0105)
     with pytest.raises(ParameterException, match="integration_step_s"):
         _make_node(SimulatorNode, rclpy_context, integration_step_s=5.0)
+
+
+# ----------------------------------------------------------------------------- fast CDR
+def test_fast_cdr_decoders_equal_rclpy():
+    from rclpy.serialization import serialize_message
+
+    from fourws_ros import cdr
+    from fourws_sim.drivers import DriverCommand
+
+    rng = np.random.default_rng(7)
+    outputs = {k: float(rng.normal()) for k in conversions.STATE_SCALARS}
+    outputs.update({k: rng.normal(size=4) for k in conversions.STATE_WHEELS})
+    for model in ("8dof", "2dof-lagged"):  # string lengths shift every later offset
+        msg = conversions.state_msg(outputs, time_s=12.3456789, step=12345, model=model)
+        msg.header.frame_id = "base_link_x"
+        parsed = cdr.parse_state(serialize_message(msg))
+        assert parsed["step"] == 12345 and parsed["sim_time_s"] == 12.3456789
+        assert parsed["stamp_ns"] == conversions.stamp_to_ns(msg.header.stamp)
+        assert parsed["model"] == model
+        for key in conversions.STATE_SCALARS:
+            assert parsed[key] == outputs[key]  # bit-identical
+        for key in conversions.STATE_WHEELS:
+            np.testing.assert_array_equal(parsed[key], outputs[key])
+    cmd = DriverCommand(0.3, 0.02, 1.5, (1.0, 2.0, 3.0, 4.0), (0.0, 0.5, 0.25, 0.125))
+    stamp, back = cdr.parse_driver_input(serialize_message(conversions.driver_msg(cmd, 7.25)))
+    assert back == cmd and stamp == 7_250_000_000
+    state = conversions.state_msg(outputs, time_s=3.0, step=3000, model="8dof")
+    for law in ("sol1", "rwc2_3dof"):
+        raw = serialize_message(conversions.rear_cmd_msg(
+            -0.0123, 0.5, law, conversions.stamp_to_ns(state.header.stamp), state.step))
+        back = cdr.parse_rear_steer_command(raw)
+        assert back == {"angle_rad": -0.0123, "rate_radps": 0.5, "law": law,
+                        "state_stamp_ns": 3_000_000_000, "state_step": 3000}
+    with pytest.raises(cdr.CdrError):
+        cdr.parse_state(b"\x00\x01\x00\x00\x01")
