@@ -104,10 +104,24 @@ def graph_env(domain_id: int, base: dict[str, str] | None = None) -> dict[str, s
     return env
 
 
-def _child_setup() -> None:
-    """In the child before exec: die with the parent (SIGTERM), own process group."""
+def _child_setup(niceness: int = 0) -> None:
+    """In the child before exec: die with the parent (SIGTERM); lower priority if asked."""
     libc = ctypes.CDLL(None, use_errno=True)
     libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    if niceness:
+        os.nice(niceness)
+
+
+def set_fifo(pid: int, priority: int) -> bool:
+    """SCHED_FIFO ``priority`` for every thread of process ``pid``; False if not permitted
+    (no CAP_SYS_NICE) — the process then keeps normal scheduling."""
+    try:
+        tids = [int(t) for t in os.listdir(f"/proc/{pid}/task")]
+        for tid in tids:
+            os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(priority))
+    except (OSError, ValueError):
+        return False
+    return True
 
 
 def node_command(node: str, params_file: Path | None = None,
@@ -196,8 +210,10 @@ class Launcher:
         self._node: Any = None
 
     # ------------------------------------------------------------------ processes
-    def start(self, name: str, cmd: list[str], required: bool = True) -> Child:
-        """Start ``cmd`` as node process ``name`` (own process group, log file)."""
+    def start(self, name: str, cmd: list[str], required: bool = True,
+              niceness: int = 0) -> Child:
+        """Start ``cmd`` as node process ``name`` (own process group, log file; ``niceness``
+        > 0 lowers its CPU priority)."""
         if not self.children:
             self._t0 = time.monotonic()
         log_path = self.log_dir / f"{name}.log"
@@ -205,7 +221,8 @@ class Launcher:
         with open(log_path, "wb") as log:
             child.proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                           stdin=subprocess.DEVNULL, env=self.env,
-                                          start_new_session=True, preexec_fn=_child_setup)
+                                          start_new_session=True,
+                                          preexec_fn=lambda: _child_setup(niceness))
         self.children.append(child)
         return child
 
@@ -376,6 +393,11 @@ STALL_TIMEOUT_S = 20.0
 #: Lockstep flow control: the simulator runs at most this many ticks ahead of the recorder
 #: (a quarter of the stream history depth, so a lagging recorder never loses a message).
 RECORDER_WINDOW_TICKS = topics.STREAM_DEPTH // 4
+#: SCHED_FIFO priority of the lockstep answer chain (simulator, maneuver, controller); they
+#: block between messages, and the kernel's RT throttling keeps 5 % of each CPU for others.
+LOCKSTEP_FIFO_PRIORITY = 10
+#: CPU niceness of the recorder process (lower priority than the answer chain).
+RECORDER_NICENESS = 10
 #: After the maneuver is done: how long the recorder may take to drain and close, s.
 RECORDER_GRACE_S = 30.0
 
@@ -599,7 +621,10 @@ def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = 
             cmd = node_command(node, params_file)
             if ros_name != NODE_NAMES.get(node, ros_name):
                 cmd += ["-r", f"__node:={ros_name}"]
-            launcher.start(ros_name, cmd)
+            # the recorder lags behind (flow control bounds it) rather than take the CPU from
+            # the lockstep answer chain simulator -> maneuver -> controller
+            launcher.start(ros_name, cmd,
+                           niceness=RECORDER_NICENESS if node == "recorder" else 0)
         echo(f"fourws run {scenario.name} / {law}: {len(names)} nodes on ROS domain "
              f"{lease.domain_id} ({scenario.clock_mode}), logs in {run_dir / 'logs'}")
         node = launcher.open_ros()
@@ -698,6 +723,14 @@ def _drive_run(launcher: Launcher, node: Any, config_json: str, recorded: list[s
         if time.monotonic() > deadline:
             raise LaunchError("the simulator's /fourws/pause service did not appear")
         spin(0.05)
+    if scenario.clock_mode == "lockstep":
+        # The answer chain runs SCHED_FIFO while the run lasts (not during start-up, so the
+        # imports and JIT compilation do not hold a CPU at real-time priority): every hop is
+        # a process wake-up, which the normal scheduler delays by 0.1-1 ms under load.
+        granted = [set_fifo(c.proc.pid, LOCKSTEP_FIFO_PRIORITY) for c in launcher.children
+                   if c.name != NODE_NAMES["recorder"] and c.proc is not None]
+        if not all(granted):
+            echo("  (real-time priority not permitted: lockstep runs slower under load)")
     future = pause.call_async(SetBool.Request(data=False))
     executor.spin_until_future_complete(future, timeout_sec=10.0)
     if not future.done():
