@@ -323,3 +323,71 @@ def test_fast_cdr_decoders_equal_rclpy():
                         "state_stamp_ns": 3_000_000_000, "state_step": 3000}
     with pytest.raises(cdr.CdrError):
         cdr.parse_state(b"\x00\x01\x00\x00\x01")
+
+
+# ----------------------------------------------------------------------------- replay
+def test_replay_timed_plays_every_message_at_rate(tmp_path, rclpy_context):
+    from rclpy.executors import SingleThreadedExecutor
+
+    from fourws_analysis.bag import BagWriter
+    from fourws_ros.replay_node import ReplayNode
+    from rclpy.serialization import serialize_message
+
+    bag = tmp_path / "bag"
+    n = 200  # 2 s of bag time at 100 Hz
+    with BagWriter(bag) as writer:
+        writer.write_run_config({"law": "fws"})
+        for k in range(n):
+            msg = conversions.state_msg({"yaw_rate_radps": k * 1e-3}, time_s=k * 0.01, step=k,
+                                        model="8dof")
+            writer.write_raw(topics.STATE, serialize_message(msg), k * 10_000_000)
+    rate = 4.0
+    replay = _make_node(ReplayNode, rclpy_context, bag_path=str(bag), rate=rate)
+    import rclpy
+
+    sink = rclpy.create_node("sink", context=rclpy_context)
+    got, clocks = [], []
+    sink.create_subscription(topics.message_class(topics.STATE), topics.STATE,
+                             lambda m: got.append((time.monotonic(), m)), topics.STREAM_QOS)
+    sink.create_subscription(topics.message_class(topics.CLOCK), topics.CLOCK, clocks.append,
+                             topics.CLOCK_QOS)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(replay)
+    executor.add_node(sink)
+    try:
+        assert _spin_until(executor, lambda: len(got) == n and len(clocks) == n, 20.0)
+    finally:
+        executor.shutdown()
+        replay.destroy_node()
+        sink.destroy_node()
+    yaw = [m.yaw_rate_radps for _, m in got]
+    np.testing.assert_allclose(yaw, np.arange(n) * 1e-3)  # all, in order
+    wall = got[-1][0] - got[0][0]
+    bag_span = (n - 1) * 0.01
+    assert abs(wall - bag_span / rate) < 0.1 * bag_span / rate  # paced at 4x
+    # one /clock per message, carrying the bag time
+    assert conversions.stamp_to_s(clocks[-1].clock) == pytest.approx(bag_span, abs=1e-9)
+
+
+def test_shipped_parameter_files_are_accepted(rclpy_context, tmp_path):
+    import yaml
+
+    from fourws_ros.controller_node import ControllerNode
+    from fourws_ros.maneuver_node import ManeuverNode
+    from fourws_ros.simulator_node import SimulatorNode
+    from fourws_sim.params import CONFIG_DIR
+
+    classes = {"fourws_simulator": SimulatorNode, "fourws_maneuver": ManeuverNode,
+               "fourws_controller": ControllerNode}
+    for path in sorted((CONFIG_DIR / "params").glob("*.yaml")):
+        data = yaml.safe_load(path.read_text())
+        for name, cls in classes.items():
+            params = dict(data[name]["ros__parameters"])
+            params["autostart"] = False if cls is SimulatorNode else params.get("autostart")
+            params = {k: v for k, v in params.items() if v is not None}
+            node = _make_node(cls, rclpy_context, **params)
+            try:
+                for key, value in params.items():
+                    assert node.get_parameter(key).value == value, (path.name, name, key)
+            finally:
+                node.destroy_node()
