@@ -393,8 +393,10 @@ STALL_TIMEOUT_S = 20.0
 #: Lockstep flow control: the simulator runs at most this many ticks ahead of the recorder
 #: (a quarter of the stream history depth, so a lagging recorder never loses a message).
 RECORDER_WINDOW_TICKS = topics.STREAM_DEPTH // 4
-#: SCHED_FIFO priority of the lockstep answer chain (simulator, maneuver, controller); they
-#: block between messages, and the kernel's RT throttling keeps 5 % of each CPU for others.
+#: SCHED_FIFO priority of the lockstep answer chain (simulator, maneuver, controller) and of
+#: the realtime simulator; they block between messages, and the kernel's RT throttling keeps
+#: 5 % of each CPU for everything else. The realtime integration thread raises itself above
+#: it (simulator parameter ``realtime_priority``).
 LOCKSTEP_FIFO_PRIORITY = 10
 #: CPU niceness of the recorder process (lower priority than the answer chain).
 RECORDER_NICENESS = 10
@@ -723,14 +725,17 @@ def _drive_run(launcher: Launcher, node: Any, config_json: str, recorded: list[s
         if time.monotonic() > deadline:
             raise LaunchError("the simulator's /fourws/pause service did not appear")
         spin(0.05)
-    if scenario.clock_mode == "lockstep":
-        # The answer chain runs SCHED_FIFO while the run lasts (not during start-up, so the
-        # imports and JIT compilation do not hold a CPU at real-time priority): every hop is
-        # a process wake-up, which the normal scheduler delays by 0.1-1 ms under load.
-        granted = [set_fifo(c.proc.pid, LOCKSTEP_FIFO_PRIORITY) for c in launcher.children
-                   if c.name != NODE_NAMES["recorder"] and c.proc is not None]
-        if not all(granted):
-            echo("  (real-time priority not permitted: lockstep runs slower under load)")
+    # Real-time priority while the run lasts (not during start-up, so imports and JIT
+    # compilation do not hold a CPU at real-time priority). Lockstep: the answer chain
+    # simulator -> maneuver -> controller, since every hop is a process wake-up that the normal
+    # scheduler delays by 0.1-1 ms under load. Realtime: every thread of the simulator, so the
+    # thread holding the GIL is never preempted while the integration thread waits for it.
+    chain = ([NODE_NAMES["simulator"], NODE_NAMES["maneuver"], controller_name]
+             if scenario.clock_mode == "lockstep" else [NODE_NAMES["simulator"]])
+    granted = [set_fifo(c.proc.pid, LOCKSTEP_FIFO_PRIORITY) for c in launcher.children
+               if c.name in chain and c.proc is not None]
+    if not all(granted):
+        echo("  (real-time priority not permitted: expect more latency under load)")
     future = pause.call_async(SetBool.Request(data=False))
     executor.spin_until_future_complete(future, timeout_sec=10.0)
     if not future.done():

@@ -102,7 +102,8 @@ def test_realtime_run_records_at_configured_rate(tmp_path):
     # paced by the wall clock: simulated time advances at real time (launcher's 50 ms polling
     # over the 3 s run bounds the measurement error at ~2 %)
     assert abs(run.realtime_factor - 1.0) < 0.05
-    assert run.overruns == 0
+    # (step lateness and overruns depend on the machine's load: `fourws bench-graph` reports
+    # them; a test asserting them would be flaky on a shared CI machine)
 
 
 def test_example_controller_replaces_builtin(tmp_path):
