@@ -214,3 +214,30 @@ def test_compiled_tire_matches_the_pre_optimization_model(tire: str) -> None:
     got = np.array([compiled(fz, alpha, kappa, 20.0, mu, p.coeffs_front)
                     for fz, alpha, kappa, mu in POINTS])
     np.testing.assert_allclose(got, np.array(TIRE[tire]), rtol=PIN_RTOL, atol=TIRE_ATOL)
+
+
+def test_interleaved_sti_tires_equal_four_scalar_calls_exactly() -> None:
+    """The 8-DOF kernels evaluate the STI tires of the four wheels interleaved (``forces4``):
+    bit for bit the numbers of four ``forces`` calls (compiled and plain Python), so the
+    speed-up cannot change a result."""
+    eightdof.kernels_for("sti")
+    kernels = sys.modules["fourws_sim.models.eightdof_kernels_sti"]
+    module = eightdof.params_for(load_vehicle("table_8_1"), "sti").tire
+    cf = module.pack_mapping({})
+    cr = module.pack_mapping({"fzt_lb": 900.0, "ka": 0.2})  # rear differs from the front
+    rng = np.random.default_rng(4)
+    rows = [np.array(point[:3]) for point in POINTS]
+    rows += [np.array([rng.uniform(-500.0, 9000.0), rng.uniform(-1.6, 1.6),
+                       rng.choice([0.0, rng.uniform(-1.0, 1.0), rng.uniform(-3.0, 3.0)])])
+             for _ in range(200)]
+    for start in range(0, len(rows) - 3, 4):
+        block = np.array(rows[start:start + 4])
+        fz, alpha, kappa = block[:, 0].copy(), block[:, 1].copy(), block[:, 2].copy()
+        vx = np.full(4, 20.0)
+        for mu, forces4 in ((0.8, kernels._forces4), (1.0, module.forces4)):
+            out = np.full((3, 4), np.nan)
+            forces4(fz, alpha, kappa, vx, mu, cf, cr, out[0], out[1], out[2])
+            scalar = kernels._tire if forces4 is kernels._forces4 else module.forces
+            ref = np.array([scalar(fz[i], alpha[i], kappa[i], 20.0, mu, cf if i < 2 else cr)
+                            for i in range(4)]).T
+            assert np.array_equal(out, ref), (block, out - ref)

@@ -5,12 +5,23 @@ scalar loops without allocation. Do not import this module directly: use
 :func:`fourws_sim.models.eightdof.kernels_for`, which loads this file once per tire model
 under its own module name with ``TIRE_NAME`` set, so every tire gets its own compiled (and
 disk-cached) variant with the tire function inlined.
+
+Speed (the simulator runs RK4 at 1 ms many times faster than real time): the right-hand side
+is inlined into the integrator loops at one call site, and it evaluates the four tires back to
+back (wheel kinematics of all four wheels first, then the four tires, then the wheel and body
+equations), so that the CPU overlaps the four independent latency chains of the tire. A tire
+module may provide ``forces4(fz, alpha, kappa, vx, mu, coeffs_front, coeffs_rear, fx, fy, mz)``
+(arrays of the four wheels FL, FR, RL, RR) that interleaves the four evaluations phase by
+phase; it must give exactly the numbers of four ``forces`` calls (``test_eightdof_regression``
+checks bit equality). Every change here keeps the floating-point operations of the model and
+their order, so the results are identical to the plain scalar code.
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
+import types
 from pathlib import Path
 from typing import Any
 
@@ -32,17 +43,20 @@ TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
 JIT_OPTIONS: dict[str, Any] = {"error_model": "numpy"}
 
 _TIRE_MODULE = get_tire(TIRE_NAME)
-_tire = numba.njit(cache=True, **JIT_OPTIONS)(_TIRE_MODULE.forces)
 
 
 def _source_digest() -> str:
-    """Short hash of the sources this variant's compiled code depends on besides this file:
-    the model module (state/input/parameter slots are frozen in as constants) and the tire
-    module (its code is linked in). numba only checks the stamp of the function's own file,
-    so without this an edited tire or model would silently run from a stale cache."""
+    """Short hash of everything this variant's compiled code depends on: this file, the JIT
+    options, the model module (state/input/parameter slots are frozen in as constants) and the
+    tire module (its code is linked in). numba only checks the stamp of a function's own file
+    and does not key its cache on compile options, so without this an edited tire or model, or
+    a tire compiled earlier with other options (its cache lives beside the tire module), would
+    silently run from a stale cache."""
     from fourws_sim.models import eightdof
 
     digest = hashlib.sha1()
+    digest.update(Path(__file__).read_bytes())
+    digest.update(repr(sorted(JIT_OPTIONS.items())).encode())
     for module in (eightdof, _TIRE_MODULE):
         digest.update(Path(module.__file__).read_bytes())  # type: ignore[arg-type]
     return digest.hexdigest()[:12]
@@ -51,16 +65,35 @@ def _source_digest() -> str:
 _VARIANT = f"{TIRE_NAME}_{_source_digest()}"
 
 
-def _jit(func: Any) -> Any:
-    """Compile ``func`` for this tire variant.
+def _variant_copy(func: Any) -> Any:
+    """A copy of ``func`` named for this variant (``rhs_sti_<digest>``, ...).
 
     numba names its cache files after the source file and the function's qualified name and
-    does not key them on globals, so each variant gets its own qualified name
-    (``rhs_sti_<digest>``, ...) -- otherwise the variants would share (and load) one cache
-    entry, and an edit of the tire or model module would not invalidate it.
+    does not key them on globals or options, so each variant gets its own qualified name --
+    otherwise the variants would share (and load) one cache entry, and an edit of the tire or
+    model module or of the options would not invalidate it. A copy, so that the tire module's
+    own function keeps its name.
     """
-    func.__qualname__ = f"{func.__name__}_{_VARIANT}"
-    return numba.njit(cache=True, **JIT_OPTIONS)(func)
+    copy = types.FunctionType(func.__code__, func.__globals__, func.__name__,
+                              func.__defaults__, func.__closure__)
+    copy.__qualname__ = f"{func.__name__}_{_VARIANT}"
+    copy.__doc__ = func.__doc__
+    return copy
+
+
+def _jit(func: Any) -> Any:
+    """Compile ``func`` for this tire variant (disk-cached under the variant's name)."""
+    return numba.njit(cache=True, **JIT_OPTIONS)(_variant_copy(func))
+
+
+def _jit_inline(func: Any) -> Any:
+    """Compile ``func`` to be inlined (numba IR level) into the kernels that call it."""
+    return numba.njit(inline="always", **JIT_OPTIONS)(func)
+
+
+#: The tire's ``forces`` as compiled into this variant (also callable from Python).
+_tire = _jit(_TIRE_MODULE.forces)
+_tire_inline = _jit_inline(_TIRE_MODULE.forces)
 
 
 # plain int slots: numba freezes module-level ints as compile-time constants
@@ -88,8 +121,20 @@ HELD_FLOOR = float(HELD_SPIN_FLOOR_RADPS)
 a_df, a_dr, a_ax, a_ay = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY
 
 
-@_jit
-def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
+def _forces4_by_wheel(fz, alpha, kappa, vx, mu, cf, cr, fx, fy, mz):  # type: ignore[no-untyped-def]
+    """``forces4`` by four ``forces`` calls (tires without their own ``forces4``)."""
+    for i in range(4):
+        cc = cf if i < 2 else cr
+        fx[i], fy[i], mz[i] = _tire_inline(fz[i], alpha[i], kappa[i], vx[i], mu, cc)
+
+
+#: Whether the tire interleaves the four wheels itself (else ``rhs`` calls ``forces`` four
+#: times, which compiles to faster code than the generic ``_forces4_by_wheel``).
+HAS_FORCES4 = hasattr(_TIRE_MODULE, "forces4")
+_forces4 = _jit_inline(getattr(_TIRE_MODULE, "forces4", _forces4_by_wheel))
+
+
+def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     """dx/dt into ``dx`` and per-wheel quantities into ``aux`` (see ``eightdof.Kernels``)."""
     U = x[i_u]
     V = x[i_v]
@@ -131,6 +176,9 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     sum_fx = 0.0
     sum_fy = 0.0
     sum_n = 0.0
+    # wheel kinematics of the four wheels, then the four tires back to back (independent:
+    # their latency chains overlap), then the wheel spin equations and the force sums (in
+    # wheel order, as before)
     for i in range(4):
         if i < 2:
             xw = a
@@ -160,8 +208,7 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         avx = abs(vx)
         den = avx if avx > vmin else vmin
         alpha = math.atan(vy / den)  # den > 0: atan2(vy, den) without the quadrant logic
-        om = x[i_w0 + i]
-        kappa = (om * rw - vx) / den
+        kappa = (x[i_w0 + i] * rw - vx) / den
         if sigma > 0.0:
             al_lag = x[i_al0 + i]
             dx[i_al0 + i] = den / sigma * (alpha - al_lag)
@@ -169,10 +216,40 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         else:
             dx[i_al0 + i] = 0.0
             alpha_t = alpha
+        aux[a_fz + i] = fz
+        aux[a_al + i] = alpha_t
+        aux[a_ka + i] = kappa
+        dx[i_w0 + i] = avx  # scratch until the spin equations below overwrite it
+    if HAS_FORCES4:
+        _forces4(aux[a_fz:a_fz + 4], aux[a_al:a_al + 4], aux[a_ka:a_ka + 4],
+                 dx[i_w0:i_w0 + 4], mu, cf, cr, aux[a_fx:a_fx + 4], aux[a_fy:a_fy + 4],
+                 aux[a_mz:a_mz + 4])
+    else:
+        for i in range(4):
+            cc = cf if i < 2 else cr
+            fx, fy, mz = _tire_inline(aux[a_fz + i], aux[a_al + i], aux[a_ka + i],
+                                      dx[i_w0 + i], mu, cc)
+            aux[a_fx + i] = fx
+            aux[a_fy + i] = fy
+            aux[a_mz + i] = mz
+    for i in range(4):
         if i < 2:
-            fx, fy, mz = _tire(fz, alpha_t, kappa, avx, mu, cf)
+            xw = a
+            cd = cdf
+            sd = sdf
+            yw = 0.5 * tf
         else:
-            fx, fy, mz = _tire(fz, alpha_t, kappa, avx, mu, cr)
+            xw = -b
+            cd = cdr
+            sd = sdr
+            yw = 0.5 * tr
+        if i == 1 or i == 3:
+            yw = -yw
+        fz = aux[a_fz + i]
+        fx = aux[a_fx + i]
+        fy = aux[a_fy + i]
+        mz = aux[a_mz + i]
+        om = x[i_w0 + i]
         fxb = fx * cd - fy * sd
         fyb = fx * sd + fy * cd
         sum_fx += fxb
@@ -197,12 +274,6 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
             dx[i_w0 + i] = -om / q[k_tb] * (1.0 - abs(t_other) / cap)
         else:
             dx[i_w0 + i] = 0.0
-        aux[a_fz + i] = fz
-        aux[a_al + i] = alpha_t
-        aux[a_ka + i] = kappa
-        aux[a_fx + i] = fx
-        aux[a_fy + i] = fy
-        aux[a_mz + i] = mz
     c = math.cos(phi)
     s = math.sin(phi)
     msh = ms * q[k_h]
@@ -237,28 +308,36 @@ def rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     aux[a_ay] = ay
 
 
-@_jit
+rhs = _jit(_rhs)
+_rhs_inline = _jit_inline(_rhs)
+
+#: Rows of the integrators' work array: the four RK4 stage derivatives, the stage state.
+_K1, _K2, _K3, _K4, _XT = 0, 1, 2, 3, 4
+
+
 def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
     """``n`` RK4 steps in place; returns the number of finite steps done."""
-    k1 = np.empty(N_STATE)
-    k2 = np.empty(N_STATE)
-    k3 = np.empty(N_STATE)
-    k4 = np.empty(N_STATE)
-    xt = np.empty(N_STATE)
+    work = np.empty((5, N_STATE))
     aux = np.empty(N_AUX)
+    xt = work[_XT]
     half = 0.5 * dt
     sixth = dt / 6.0
     for step in range(n):
-        rhs(x, u, q, cf, cr, k1, aux)
-        for j in range(N_STATE):
-            xt[j] = x[j] + half * k1[j]
-        rhs(xt, u, q, cf, cr, k2, aux)
-        for j in range(N_STATE):
-            xt[j] = x[j] + half * k2[j]
-        rhs(xt, u, q, cf, cr, k3, aux)
-        for j in range(N_STATE):
-            xt[j] = x[j] + dt * k3[j]
-        rhs(xt, u, q, cf, cr, k4, aux)
+        # one inlined right-hand side for the four stages (stage s starts from
+        # x + h_s k_{s-1} with h = dt/2, dt/2, dt)
+        for stage in range(4):
+            if stage == 0:
+                _rhs_inline(x, u, q, cf, cr, work[_K1], aux)
+            else:
+                h = dt if stage == 3 else half
+                kp = work[stage - 1]
+                for j in range(N_STATE):
+                    xt[j] = x[j] + h * kp[j]
+                _rhs_inline(xt, u, q, cf, cr, work[stage], aux)
+        k1 = work[_K1]
+        k2 = work[_K2]
+        k3 = work[_K3]
+        k4 = work[_K4]
         ok = True
         for j in range(N_STATE):
             xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
@@ -271,14 +350,14 @@ def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
     return n
 
 
-@_jit
 def euler(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
     """``n`` explicit-Euler steps in place; returns the number of finite steps done."""
-    k1 = np.empty(N_STATE)
-    xt = np.empty(N_STATE)
+    work = np.empty((2, N_STATE))
     aux = np.empty(N_AUX)
+    k1 = work[0]
+    xt = work[1]
     for step in range(n):
-        rhs(x, u, q, cf, cr, k1, aux)
+        _rhs_inline(x, u, q, cf, cr, k1, aux)
         ok = True
         for j in range(N_STATE):
             xt[j] = x[j] + dt * k1[j]
@@ -289,3 +368,7 @@ def euler(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
         for j in range(N_STATE):
             x[j] = xt[j]
     return n
+
+
+rk4 = _jit(rk4)
+euler = _jit(euler)

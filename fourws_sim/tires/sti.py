@@ -94,6 +94,7 @@ from enum import IntEnum
 from typing import Mapping
 
 import numpy as np
+from numba.extending import register_jitable
 
 from fourws_sim.errors import ParameterError
 
@@ -180,6 +181,117 @@ _C1, _C2, _C3, _C4 = int(COEF.C1), int(COEF.C2), int(COEF.C3), int(COEF.C4)
 _G1, _G2, _KMU = int(COEF.G1), int(COEF.G2), int(COEF.KMU)
 
 
+#: ``_prepare``'s result for a tire that gives no force (no load, no friction, no slip);
+#: g = fz = den = 1 keep the passes free of 0/0.
+_NO_FORCE = (False, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0)
+
+
+# The model is split into three phases (numba-compilable helpers, also plain Python) so that
+# the 8-DOF kernels can interleave the four wheels phase by phase (``forces4``); ``forces`` runs
+# them for one wheel. error_model="numpy": IEEE division (inf/nan, no ZeroDivisionError checks),
+# as the kernels compile ``forces``.
+@register_jitable(error_model="numpy")
+def _prepare(fz_n: float, alpha_rad: float, kappa: float, mu: float,
+             coeffs: np.ndarray) -> tuple[bool, float, float, float, float, float, float,
+                                          float, float]:
+    """Load and slip terms: (valid, Fz lb, a_p0 ft, mu at sliding, gx, gy, g, h, den)."""
+    if not (fz_n > 0.0 and mu > 0.0):
+        return _NO_FORCE
+    fz = fz_n / N_PER_LBF
+    ap0 = (_AP_CONSTANT * math.sqrt(fz * coeffs[_FZT])
+           / (coeffs[_TW] * (coeffs[_TP] + _AP_PRESSURE_OFFSET_PSI)))
+    a1 = coeffs[_A1]
+    a2 = coeffs[_A2]
+    fz_c = fz if fz < 0.5 * a2 else 0.5 * a2
+    c_a = coeffs[_A0] + a1 * fz_c - a1 / a2 * fz_c * fz_c  # lb/rad (C.2)
+    if c_a < 0.0:
+        c_a = 0.0
+    c_s = coeffs[_CSFZ] * fz  # lb per unit slip (C.3)
+    mu0 = mu * (coeffs[_B1] * fz + coeffs[_B3] + coeffs[_B4] * fz * fz)
+    if not mu0 > 0.0:
+        return _NO_FORCE
+
+    sa = math.sin(alpha_rad)
+    ca = abs(math.cos(alpha_rad))
+    s = -kappa  # braking slip of the original model
+    q = math.sqrt(sa * sa + s * s * ca * ca)
+    if q > 1.0:
+        q = 1.0
+    c_s_slide = c_s + (c_a - c_s) * q  # K_c' (C.11), in stiffness units
+    mu_slide = mu0 * (1.0 - coeffs[_KMU] * q)
+    if mu_slide < 0.0:
+        mu_slide = 0.0
+
+    # direction of the force (both terms multiplied by cos(alpha) to avoid tan(90 deg))
+    gy = c_a * sa
+    gx = c_s_slide * s * ca
+    g = math.sqrt(gy * gy + gx * gx)
+    if not g > 0.0:
+        return _NO_FORCE
+    # composite slip sigma = h (a_p/a_p0)^2 / den, den = 0 means sigma = infinity
+    hx = c_s * s * ca
+    h = 0.25 * math.pi * math.sqrt(gy * gy + hx * hx)
+    den = mu0 * fz * ca
+    return True, fz, ap0, mu_slide, gx, gy, g, h, den
+
+
+@register_jitable(error_model="numpy")
+def _pass(p: tuple[bool, float, float, float, float, float, float, float, float], ratio: float,
+          coeffs: np.ndarray) -> tuple[float, float, float, float]:
+    """One evaluation at contact-length ratio ``a_p/a_p0 = ratio``: (f, magnitude lb,
+    Fx_b lb, the ratio the resulting Fx gives)."""
+    fz = p[1]
+    mu_slide = p[3]
+    gx = p[4]
+    g = p[6]
+    h = p[7]
+    den = p[8]
+    c1 = coeffs[_C1]
+    c2 = coeffs[_C2]
+    c3 = coeffs[_C3]
+    c4 = coeffs[_C4]
+    num = h * ratio * ratio
+    if not num > 0.0:
+        f = 0.0
+    elif num <= den:
+        sg = num / den
+        sg2 = sg * sg
+        f = ((c1 * sg2 * sg + c2 * sg2 + _F_SLOPE * sg)
+             / (c1 * sg2 * sg + c3 * sg2 + c4 * sg + 1.0))
+    else:
+        u = den / num  # 1/sigma in [0, 1): the sigma -> infinity limit stays finite
+        u2 = u * u
+        f = (c1 + c2 * u + _F_SLOPE * u2) / (c1 + c3 * u + c4 * u2 + u2 * u)
+    mag = mu_slide * fz * f
+    fx_b = mag * gx / g
+    new_ratio = 1.0 - coeffs[_KA] * abs(fx_b) / fz
+    if new_ratio < 0.0:
+        new_ratio = 0.0
+    return f, mag, fx_b, new_ratio
+
+
+@register_jitable(error_model="numpy")
+def _finish(p: tuple[bool, float, float, float, float, float, float, float, float], f: float,
+            mag: float, fx_b: float, ratio: float,
+            coeffs: np.ndarray) -> tuple[float, float, float]:
+    """Forces and moment in fourws' frame and units from the last pass."""
+    if not p[0]:
+        return 0.0, 0.0, 0.0
+    ap0 = p[2]
+    fy_b = mag * p[5] / p[6]
+    # original model: Fy positive for positive alpha, Fx_b positive braking; fourws frame:
+    fx_lb = -fx_b
+    fy_lb = -fy_b
+    decay = 1.0 - f
+    if decay < 0.0:
+        decay = 0.0
+    g2 = coeffs[_G2]
+    shape = decay if g2 == 1.0 else decay ** g2  # pow only when G2 is not Table C.1's 1.0
+    trail_ft = coeffs[_G1] * _TRAIL_PER_LENGTH * ap0 * ratio * shape
+    mz_ftlb = -trail_ft * fy_lb + coeffs[_K1] * fx_lb * fy_lb
+    return fx_lb * N_PER_LBF, fy_lb * N_PER_LBF, mz_ftlb * N_PER_LBF * M_PER_FT
+
+
 def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float,
            coeffs: np.ndarray) -> tuple[float, float, float]:
     """Tire-frame forces of the STI composite-slip tire.
@@ -206,87 +318,51 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
         Longitudinal force (N, positive forward), lateral force (N, positive left),
         aligning moment (N m, positive counter-clockwise seen from above).
     """
-    if not (fz_n > 0.0 and mu > 0.0):
-        return 0.0, 0.0, 0.0
-    fz = fz_n / N_PER_LBF
-    ap0 = (_AP_CONSTANT * math.sqrt(fz * coeffs[_FZT])
-           / (coeffs[_TW] * (coeffs[_TP] + _AP_PRESSURE_OFFSET_PSI)))
-    # everything below is inlined (no helper calls) so that numba.njit compiles this alone
-    a1 = coeffs[_A1]
-    a2 = coeffs[_A2]
-    fz_c = fz if fz < 0.5 * a2 else 0.5 * a2
-    c_a = coeffs[_A0] + a1 * fz_c - a1 / a2 * fz_c * fz_c  # lb/rad (C.2)
-    if c_a < 0.0:
-        c_a = 0.0
-    c_s = coeffs[_CSFZ] * fz  # lb per unit slip (C.3)
-    mu0 = mu * (coeffs[_B1] * fz + coeffs[_B3] + coeffs[_B4] * fz * fz)
-    if not mu0 > 0.0:
-        return 0.0, 0.0, 0.0
+    p = _prepare(fz_n, alpha_rad, kappa, mu, coeffs)
+    # pass 0 at a_p = a_p0 (Fx = 0); pass 1 with the Fx of pass 0 unless it has none (or
+    # KA = 0); the trail takes the ratio that pass 1's Fx gives
+    f, mag, fx_b, ratio1 = _pass(p, 1.0, coeffs)
+    ratio = 1.0
+    if ratio1 != ratio:
+        f, mag, fx_b, ratio = _pass(p, ratio1, coeffs)
+    return _finish(p, f, mag, fx_b, ratio, coeffs)
 
-    sa = math.sin(alpha_rad)
-    ca = abs(math.cos(alpha_rad))
-    s = -kappa  # braking slip of the original model
-    q = math.sqrt(sa * sa + s * s * ca * ca)
-    if q > 1.0:
-        q = 1.0
-    c_s_slide = c_s + (c_a - c_s) * q  # K_c' (C.11), in stiffness units
-    mu_slide = mu0 * (1.0 - coeffs[_KMU] * q)
-    if mu_slide < 0.0:
-        mu_slide = 0.0
 
-    # direction of the force (both terms multiplied by cos(alpha) to avoid tan(90 deg))
-    gy = c_a * sa
-    gx = c_s_slide * s * ca
-    g = math.sqrt(gy * gy + gx * gx)
-    if not g > 0.0:
-        return 0.0, 0.0, 0.0
-    # composite slip sigma = h (a_p/a_p0)^2 / den, den = 0 means sigma = infinity
-    hx = c_s * s * ca
-    h = 0.25 * math.pi * math.sqrt(gy * gy + hx * hx)
-    den = mu0 * fz * ca
-    c1 = coeffs[_C1]
-    c2 = coeffs[_C2]
-    c3 = coeffs[_C3]
-    c4 = coeffs[_C4]
+def forces4(fz_n: np.ndarray, alpha_rad: np.ndarray, kappa: np.ndarray, vx_mps: np.ndarray,
+            mu: float, coeffs_front: np.ndarray, coeffs_rear: np.ndarray, fx_n: np.ndarray,
+            fy_n: np.ndarray, mz_nm: np.ndarray) -> None:
+    """:func:`forces` of the four wheels (FL, FR, RL, RR; front coefficients for the first
+    two) into ``fx_n, fy_n, mz_nm``, phase by phase.
 
-    ratio = 1.0  # a_p / a_p0; pass 0 at Fx = 0, pass 1 with the Fx of pass 0
-    f = 0.0
-    fx_b = 0.0
-    fy_b = 0.0
-    for _ in range(2):
-        num = h * ratio * ratio
-        if not num > 0.0:
-            f = 0.0
-        elif num <= den:
-            sg = num / den
-            sg2 = sg * sg
-            f = ((c1 * sg2 * sg + c2 * sg2 + _F_SLOPE * sg)
-                 / (c1 * sg2 * sg + c3 * sg2 + c4 * sg + 1.0))
-        else:
-            u = den / num  # 1/sigma in [0, 1): the sigma -> infinity limit stays finite
-            u2 = u * u
-            f = (c1 + c2 * u + _F_SLOPE * u2) / (c1 + c3 * u + c4 * u2 + u2 * u)
-        mag = mu_slide * fz * f
-        fx_b = mag * gx / g
-        fy_b = mag * gy / g
-        new_ratio = 1.0 - coeffs[_KA] * abs(fx_b) / fz
-        if new_ratio < 0.0:
-            new_ratio = 0.0
-        if new_ratio == ratio:  # no longitudinal force (or KA = 0): pass 1 would repeat pass 0
-            break
-        ratio = new_ratio
-
-    # original model: Fy positive for positive alpha, Fx_b positive braking; fourws frame:
-    fx_lb = -fx_b
-    fy_lb = -fy_b
-    decay = 1.0 - f
-    if decay < 0.0:
-        decay = 0.0
-    g2 = coeffs[_G2]
-    shape = decay if g2 == 1.0 else decay ** g2  # pow only when G2 is not Table C.1's 1.0
-    trail_ft = coeffs[_G1] * _TRAIL_PER_LENGTH * ap0 * ratio * shape
-    mz_ftlb = -trail_ft * fy_lb + coeffs[_K1] * fx_lb * fy_lb
-    return fx_lb * N_PER_LBF, fy_lb * N_PER_LBF, mz_ftlb * N_PER_LBF * M_PER_FT
+    Gives exactly the numbers of four :func:`forces` calls; the four evaluations of each phase
+    are independent, so compiled code overlaps their latency (the 8-DOF kernels use this).
+    """
+    cf = coeffs_front
+    cr = coeffs_rear
+    p0 = _prepare(fz_n[0], alpha_rad[0], kappa[0], mu, cf)
+    p1 = _prepare(fz_n[1], alpha_rad[1], kappa[1], mu, cf)
+    p2 = _prepare(fz_n[2], alpha_rad[2], kappa[2], mu, cr)
+    p3 = _prepare(fz_n[3], alpha_rad[3], kappa[3], mu, cr)
+    f0, m0, x0, s0 = _pass(p0, 1.0, cf)
+    f1, m1, x1, s1 = _pass(p1, 1.0, cf)
+    f2, m2, x2, s2 = _pass(p2, 1.0, cr)
+    f3, m3, x3, s3 = _pass(p3, 1.0, cr)
+    r0 = 1.0
+    r1 = 1.0
+    r2 = 1.0
+    r3 = 1.0
+    if s0 != r0:
+        f0, m0, x0, r0 = _pass(p0, s0, cf)
+    if s1 != r1:
+        f1, m1, x1, r1 = _pass(p1, s1, cf)
+    if s2 != r2:
+        f2, m2, x2, r2 = _pass(p2, s2, cr)
+    if s3 != r3:
+        f3, m3, x3, r3 = _pass(p3, s3, cr)
+    fx_n[0], fy_n[0], mz_nm[0] = _finish(p0, f0, m0, x0, r0, cf)
+    fx_n[1], fy_n[1], mz_nm[1] = _finish(p1, f1, m1, x1, r1, cf)
+    fx_n[2], fy_n[2], mz_nm[2] = _finish(p2, f2, m2, x2, r2, cr)
+    fx_n[3], fy_n[3], mz_nm[3] = _finish(p3, f3, m3, x3, r3, cr)
 
 
 def cornering_stiffness_analytic(coeffs: np.ndarray, fz_n: float) -> float:
