@@ -468,6 +468,7 @@ def run_config(scenario: Any, law: str) -> dict[str, Any]:
         "integration_step_s": scenario.integration_step_s,
         "control_period_s": scenario.control_period_s,
         "state_period_s": scenario.state_period_s, "clock_mode": scenario.clock_mode,
+        "speed_mps": float(scenario.maneuver.initial_speed_mps),
         "scenario": scenario.to_dict(), "versions": versions,
     }
 
