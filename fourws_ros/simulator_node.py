@@ -311,7 +311,10 @@ class SimulatorNode(Node):
             self._stop_rt_thread()
         elif not pause and self.paused:
             self.paused = False
-            self._start()
+            if self.clock_mode == "lockstep" and self._started:
+                self._lockstep_try_advance()  # answers that came while paused count now
+            else:
+                self._start()
         response.success = True
         response.message = "paused" if self.paused else "running"
         return response

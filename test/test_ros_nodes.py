@@ -391,3 +391,49 @@ def test_shipped_parameter_files_are_accepted(rclpy_context, tmp_path):
                     assert node.get_parameter(key).value == value, (path.name, name, key)
             finally:
                 node.destroy_node()
+
+
+def test_simulator_pause_and_reset_services(lockstep_sim):
+    from std_srvs.srv import SetBool, Trigger
+
+    sim, peer, executor = lockstep_sim
+    pause = peer.node.create_client(SetBool, topics.SRV_PAUSE)
+    reset = peer.node.create_client(Trigger, topics.SRV_RESET)
+
+    def call(client, request):
+        assert _spin_until(executor, client.service_is_ready, 10.0)
+        future = client.call_async(request)
+        assert _spin_until(executor, future.done, 10.0)
+        return future.result()
+
+    assert _spin_until(executor, lambda: len(peer.states) == 1, 20.0)
+    assert call(pause, SetBool.Request(data=True)).success
+    peer.answer(peer.states[0], 0.0)
+    _spin_until(executor, lambda: len(peer.states) > 1, 0.5)
+    assert len(peer.states) == 1  # paused: the answered tick does not advance
+    resumed = time.monotonic()
+    assert call(pause, SetBool.Request(data=False)).success
+    assert _spin_until(executor, lambda: len(peer.states) == 2, 10.0)
+    assert time.monotonic() - resumed < 0.3  # at once, not after the command timeout
+    assert peer.states[1].sim_time_s == pytest.approx(sim.control_period_s, abs=1e-12)
+    res = call(reset, Trigger.Request())
+    assert res.success
+    assert _spin_until(executor, lambda: len(peer.states) == 3, 10.0)
+    back = peer.states[2]
+    assert back.step == 0 and back.sim_time_s == 0.0
+    assert back.speed_mps == pytest.approx(sim._cfg["initial_speed_mps"], abs=1e-12)
+
+
+def test_maneuver_node_refuses_bad_maneuver(rclpy_context, tmp_path):
+    from fourws_ros.maneuver_node import ManeuverNode
+    from fourws_sim.errors import ParameterError, UnknownNameError
+
+    with pytest.raises(UnknownNameError, match="no_such_maneuver"):
+        _make_node(ManeuverNode, rclpy_context, maneuver="no_such_maneuver")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("type: step_steer\ninitial_speed_mps: 20.0\nduration_s: -1.0\n"
+                   "amplitude_rad: 0.01\n")
+    with pytest.raises(ParameterError, match="duration_s"):
+        _make_node(ManeuverNode, rclpy_context, maneuver=str(bad))
+    with pytest.raises(ParameterError, match="maneuver_json"):
+        _make_node(ManeuverNode, rclpy_context, maneuver_json="{type: oops")
