@@ -40,6 +40,8 @@ DEFAULT_LINEAR_SPEED_MPS = 85.0 / 3.6
 N_WHEELS = 4
 #: Name of the nonlinear model that runs through compiled kernels.
 EIGHT_DOF = "8dof"
+#: dtype of the input vectors the compiled kernels take without conversion.
+_FLOAT64 = np.dtype(np.float64)
 
 
 @dataclass(frozen=True)
@@ -126,6 +128,7 @@ class Simulator:
         self._is_8dof = model == EIGHT_DOF
         self._n_input = len(self.model.INPUT)
         self._u = np.zeros(self._n_input)
+        self._u_shape = (self._n_input,)
         self._kernel = None
         if self._is_8dof:
             from fourws_sim.models import eightdof
@@ -288,6 +291,22 @@ class Simulator:
         ParameterError
             Bad input vector length, negative brake torque, negative ``n_steps``.
         """
+        if (self._kernel is not None and type(u) is np.ndarray and type(n_steps) is int
+                and u.shape == self._u_shape and u.dtype == _FLOAT64 and n_steps >= 0):
+            # fast path (the simulator node's call at every tick): a float64 vector in INPUT
+            # order whose values pass the cheap checks of input_vector; anything else,
+            # including every error, takes the general path below
+            arr = u.copy()  # the caller may reuse u; outputs() reads the held input
+            values = arr.tolist()
+            if math.isfinite(sum(values)) and min(values[self._brakes]) >= 0.0:
+                self._u = arr
+                done = int(self._kernel(self._x, arr, self._q, self._cf, self._cr, self.dt_s,
+                                        n_steps))
+                self._step += done
+                self._t = self._step * self.dt_s
+                if done < n_steps:
+                    self._raise_diverged()
+                return
         arr = self.input_vector(u)
         if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) \
                 or n_steps < 0:
