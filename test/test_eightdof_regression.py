@@ -241,3 +241,30 @@ def test_interleaved_sti_tires_equal_four_scalar_calls_exactly() -> None:
             ref = np.array([scalar(fz[i], alpha[i], kappa[i], 20.0, mu, cf if i < 2 else cr)
                             for i in range(4)]).T
             assert np.array_equal(out, ref), (block, out - ref)
+
+
+def test_vector_fast_path_checks_like_the_general_path() -> None:
+    """``Simulator.step`` with a float64 vector (its fast path) rejects what ``input_vector``
+    rejects, names the component, and steps exactly like a list input (general path)."""
+    from fourws_sim.errors import NonFiniteError, ParameterError
+
+    sim = Simulator(load_vehicle("table_8_1"))
+    sim.reset(speed_mps=SPEED_85_MPS)
+    u = np.zeros(len(INPUT))
+    u[INPUT.BRAKE_RL] = -1.0
+    with pytest.raises(ParameterError, match=r"brake_torque_nm\[RL\]"):
+        sim.step(u, 10)
+    u[INPUT.BRAKE_RL] = 0.0
+    u[INPUT.DRIVE_FR] = np.nan
+    with pytest.raises(NonFiniteError, match=r"drive_torque_nm\[FR\]"):
+        sim.step(u, 10)
+    assert sim.step_count == 0
+    u[INPUT.DRIVE_FR] = 50.0
+    u[INPUT.DELTA_F] = 0.02
+    other = Simulator(load_vehicle("table_8_1"))
+    other.reset(speed_mps=SPEED_85_MPS)
+    for _ in range(20):
+        sim.step(u, 10)
+        other.step(u.tolist(), 10)
+    assert np.array_equal(sim.state, other.state)
+    assert sim.step_count == other.step_count == 200
