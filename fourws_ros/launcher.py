@@ -555,6 +555,7 @@ class _Interrupted(Exception):
 def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = None,
               echo: Callable[[str], None] | None = None,
               controller: tuple[str, str] = ("controller", NODE_NAMES["controller"]),
+              replay_driver_from: Path | None = None,
               node_overrides: dict[str, dict[str, Any]] | None = None,
               on_running: Callable[[Launcher], None] | None = None) -> GraphRun:
     """Run one scenario with one law through the real node graph, recording a bag.
@@ -574,6 +575,10 @@ def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = 
     controller : (str, str)
         ``fourws node`` name and ROS node name of the controller (a user controller may
         replace the built-in one).
+    replay_driver_from : Path, optional
+        A bag whose ``/fourws/driver_input`` drives this run instead of the maneuver node
+        (replay node in answer mode, e.g. the same driver with another controller; the
+        scenario should be the recorded one, for the initial speed).
     node_overrides : dict, optional
         Extra parameters per ROS node name (tests, benchmarks).
     on_running : callable, optional
@@ -595,6 +600,12 @@ def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = 
     bag_path = run_dir / "bag" if record else None
     controller_node, controller_name = controller
     params = node_parameters(scenario, law, bag_path, controller_name)
+    driver_node = "maneuver"
+    if replay_driver_from is not None:
+        driver_node = "replay"
+        params[NODE_NAMES["maneuver"]] = {
+            "bag_path": str(replay_driver_from), "topics": [topics.DRIVER_INPUT],
+            "mode": "answer", "publish_clock": False}
     for name, extra in (node_overrides or {}).items():
         params.setdefault(name, {}).update(extra)
     params_file = write_params_file(run_dir / "params.yaml", params)
@@ -618,11 +629,11 @@ def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = 
         signal.signal(signal.SIGINT, interrupt)
         signal.signal(signal.SIGTERM, interrupt)
         names = ([("recorder", NODE_NAMES["recorder"])] if record else []) + [
-            (controller_node, controller_name), ("maneuver", NODE_NAMES["maneuver"]),
+            (controller_node, controller_name), (driver_node, NODE_NAMES["maneuver"]),
             ("simulator", NODE_NAMES["simulator"])]
         for node, ros_name in names:
             cmd = node_command(node, params_file)
-            if ros_name != NODE_NAMES.get(node, ros_name):
+            if ros_name != NODE_NAMES.get(node, f"fourws_{node}"):
                 cmd += ["-r", f"__node:={ros_name}"]
             # the recorder lags behind (flow control bounds it) rather than take the CPU from
             # the lockstep answer chain simulator -> maneuver -> controller

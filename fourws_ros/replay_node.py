@@ -11,10 +11,12 @@ Two modes (parameter ``mode``):
     Lockstep replay: for every ``VehicleState`` a running simulator publishes, publishes the
     recorded messages of the chosen topics whose stamp equals the state's stamp. This is how a
     recorded driver input drives a new lockstep run (e.g. with another controller) in place of
-    the maneuver node: ``topics: [/fourws/driver_input]``.
+    the maneuver node: ``topics: [/fourws/driver_input]`` (``fourws_ros.launcher.run_graph``
+    with ``replay_driver_from``). Like the maneuver node it publishes ``ManeuverStatus``, with
+    ``done`` at the first state after the last recorded message, and then stays up.
 
-Messages are published as the recorded CDR bytes (never deserialized). The node finishes when
-the bag is exhausted (timed) or no recorded message is left (answer).
+Messages are published as the recorded CDR bytes (never deserialized). In timed mode the node
+finishes (exits) when the bag is exhausted.
 
 Parameters (ROS)
 ----------------
@@ -45,6 +47,8 @@ from fourws_ros.recorder_node import stamp_ns
 from fourws_sim.errors import ParameterError
 
 MODES = ("timed", "answer")
+#: Answer mode: a progress status every this many answered states.
+STATUS_EVERY_TICKS = 10
 #: Longest sleep between checks in timed mode, s (how quickly a signal is noticed).
 _MAX_SLEEP_S = 0.05
 
@@ -120,6 +124,12 @@ class ReplayNode(Node):
                 if key is not None:
                     self._by_stamp.setdefault(key, []).append((topic, raw))
             self._left = sum(len(v) for v in self._by_stamp.values())
+            self._total = self._left
+            self._done_sent = False
+            self._ticks = 0
+            self.status_pub = self.create_publisher(
+                topics.message_class(topics.MANEUVER_STATUS), topics.MANEUVER_STATUS,
+                topics.STATUS_QOS)
             self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                      self._on_state, topics.STREAM_QOS, raw=True)
         else:
@@ -131,12 +141,31 @@ class ReplayNode(Node):
 
     def _on_state(self, raw: bytes) -> None:
         key = stamp_ns(raw)
-        for topic, data in self._by_stamp.pop(key, []) if key is not None else []:
+        if key is None or self._done_sent:
+            return
+        due = self._by_stamp.pop(key, [])
+        if not due and self._left == 0:
+            self._status(key, "done", True, "done: recorded input exhausted")
+            self._done_sent = True
+            self.get_logger().info(f"replay done after {self.published} messages")
+            return
+        for topic, data in due:
             self.pubs[topic].publish(data)
             self.published += 1
             self._left -= 1
-        if self._left == 0:
-            self.finished = True
+        self._ticks += 1
+        if self._ticks % STATUS_EVERY_TICKS == 1:
+            self._status(key, "replay", False, "phase replay" if self._ticks == 1 else "")
+
+    def _status(self, stamp: int, phase: str, done: bool, event: str) -> None:
+        msg = topics.message_class(topics.MANEUVER_STATUS)()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, conversions.NS_PER_S)
+        msg.maneuver = "replay"
+        msg.phase = phase
+        msg.progress = 1.0 - self._left / self._total if self._total else 1.0
+        msg.done = done
+        msg.event = event
+        self.status_pub.publish(msg)
 
     def _play_due(self) -> None:
         if self._t0_wall is None:

@@ -169,3 +169,23 @@ def test_cli_run_rejects_malformed_scenario(tmp_path):
     res = _cli("run", "--law", "nope", cwd=tmp_path)
     assert res.returncode == 2 and "unknown law 'nope'" in res.stderr
     assert not any(tmp_path.glob("runs/*"))  # nothing was started
+
+
+def test_replayed_driver_input_drives_new_run_with_other_law(sol1_run, tmp_path):
+    # the sol1 run's recorded driver, replayed tick by tick, drives a run with another law
+    sc, first = sol1_run
+    run = run_graph(sc, "ff_zero_sideslip", tmp_path, run_name="replayed",
+                    replay_driver_from=first.bag_path)
+    assert run.ok, run.reason
+    old, new = load_bag(first.bag_path), load_bag(run.bag_path)
+    drv_old, drv_new = old.topics[topics.DRIVER_INPUT], new.topics[topics.DRIVER_INPUT]
+    assert len(drv_new) == len(drv_old)
+    np.testing.assert_array_equal(drv_new.fields["front_wheel_angle_rad"],
+                                  drv_old.fields["front_wheel_angle_rad"])
+    np.testing.assert_array_equal(drv_new.fields["drive_torque_nm"],
+                                  drv_old.fields["drive_torque_nm"])
+    # and the new law really steered the rear wheels differently
+    cmd_old = old.topics[topics.REAR_STEER_CMD].fields["angle_rad"]
+    cmd_new = new.topics[topics.REAR_STEER_CMD].fields["angle_rad"]
+    assert set(new.topics[topics.REAR_STEER_CMD].fields["law"]) == {"ff_zero_sideslip"}
+    assert np.max(np.abs(cmd_new - cmd_old)) > 1e-4
