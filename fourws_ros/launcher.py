@@ -645,6 +645,7 @@ def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = 
         ok, reason = _drive_run(launcher, node, config_json, recorded, controller_name, state,
                                 scenario, echo, on_running)
     except _Interrupted:
+        state.setdefault("t_end", time.monotonic())
         ok, reason, interrupted = False, "interrupted (Ctrl-C / SIGTERM)", True
     except LaunchError as exc:
         ok, reason = False, str(exc)

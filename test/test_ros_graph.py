@@ -189,3 +189,53 @@ def test_replayed_driver_input_drives_new_run_with_other_law(sol1_run, tmp_path)
     cmd_new = new.topics[topics.REAR_STEER_CMD].fields["angle_rad"]
     assert set(new.topics[topics.REAR_STEER_CMD].fields["law"]) == {"ff_zero_sideslip"}
     assert np.max(np.abs(cmd_new - cmd_old)) > 1e-4
+
+
+def _node_processes(marker: str) -> list[int]:
+    """PIDs of live processes whose command line contains ``marker``."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            cmdline = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+            status = (entry / "status").read_text()
+        except OSError:
+            continue
+        if marker in cmdline and "params.yaml" in cmdline and "\nState:\tZ" not in status:
+            pids.append(int(entry.name))
+    return pids
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGKILL, -9)])
+def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
+    import time
+
+    scenario = tmp_path / "long.yaml"
+    scenario.write_text("vehicle: table_8_1\nmaneuver: {type: step_steer, initial_speed_mps: "
+                        "20.0, duration_s: 60.0, amplitude_rad: 0.01}\nlaws: [sol1]\n"
+                        "clock_mode: realtime\n")
+    out = tmp_path / "runs"
+    proc = subprocess.Popen([sys.executable, "-m", "fourws_cli.main", "run", str(scenario),
+                             "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+    marker = f"{out}/"  # the node processes' --params-file lies in the run folder
+    deadline = time.monotonic() + 60
+    # running: the recorder's periodic flushes have put ~100 messages (~370 B) on disk
+    while time.monotonic() < deadline and sum(
+            f.stat().st_size for f in out.glob("*/bag/*.mcap")) < 100 * 364:
+        time.sleep(0.2)
+    assert len(_node_processes(marker)) == 4  # simulator, maneuver, controller, recorder
+    proc.send_signal(sig)
+    proc.communicate(timeout=60)
+    assert proc.returncode == code
+    deadline = time.monotonic() + 20
+    while _node_processes(marker) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert _node_processes(marker) == []
+    (bag,) = out.glob("*/bag")
+    run = load_bag(bag)
+    assert (bag / "metadata.yaml").is_file()  # finalized, even with the launcher killed
+    state = run.topics[topics.STATE]
+    assert len(state) > 10  # the run up to the signal, at 100 Hz from t = 0
+    np.testing.assert_allclose(np.diff(state.time_s), 0.01, atol=1e-9)  # none lost
