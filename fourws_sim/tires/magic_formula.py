@@ -63,6 +63,7 @@ from enum import IntEnum
 from typing import Mapping
 
 import numpy as np
+from numba.extending import register_jitable
 
 from fourws_sim.errors import ParameterError
 
@@ -120,6 +121,28 @@ N_COEFFS = len(COEF)
  _SSZ2) = range(N_COEFFS)
 
 _TWO_OVER_PI = 2.0 / math.pi
+
+
+@register_jitable(error_model="numpy")
+def _curved(x: float, e: float) -> float:
+    """The Magic Formula's ``x - E (x - atan(x))``; ``x`` itself when ``E = 0`` (the
+    defaults' combined-slip curvatures), without the atan that would be multiplied by 0."""
+    if e == 0.0:
+        return x
+    return x - e * (x - math.atan(x))
+
+
+@register_jitable(error_model="numpy")
+def _cos_atan(x: float) -> float:
+    """``cos(atan(x)) = 1/sqrt(1 + x^2)`` without the two transcendental calls (equal to
+    round-off; for ``|x| > 1e154`` it gives 0 instead of ~1e-17/|x|)."""
+    return 1.0 / math.sqrt(1.0 + x * x)
+
+
+@register_jitable(error_model="numpy")
+def _sin_2atan(y: float) -> float:
+    """``sin(2 atan(y)) = 2 y / (1 + y^2)`` (equal to round-off; ``y`` is a load ratio)."""
+    return 2.0 * y / (1.0 + y * y)
 
 
 def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float,
@@ -183,7 +206,7 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
     ey *= 1.0 - c[_PEY3] * (1.0 if ay > 0.0 else (-1.0 if ay < 0.0 else 0.0))
     if ey > 1.0:
         ey = 1.0
-    kya = c[_PKY1] * fz0 * math.sin(2.0 * math.atan(fz_n / (c[_PKY2] * fz0)))
+    kya = c[_PKY1] * fz0 * _sin_2atan(fz_n / (c[_PKY2] * fz0))
     svy = fz_n * mu * (c[_PVY1] + c[_PVY2] * dfz)
     by = 0.0
     fy0 = svy
@@ -194,33 +217,36 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
 
     # ---- combined slip weighting
     shxa = c[_RHX1]
-    bxa = c[_RBX1] * math.cos(math.atan(c[_RBX2] * k))
+    bxa = c[_RBX1] * _cos_atan(c[_RBX2] * k)
     cxa = c[_RCX1]
     exa = c[_REX1] + c[_REX2] * dfz
     if exa > 1.0:
         exa = 1.0
     s1 = bxa * (a + shxa)
     s0 = bxa * shxa
-    gxa = (math.cos(cxa * math.atan(s1 - exa * (s1 - math.atan(s1))))
-           / math.cos(cxa * math.atan(s0 - exa * (s0 - math.atan(s0)))))
+    gxa = (math.cos(cxa * math.atan(_curved(s1, exa)))
+           / (math.cos(cxa * math.atan(_curved(s0, exa))) if shxa != 0.0 else 1.0))
     if gxa < 0.0:
         gxa = 0.0
     fx = gxa * fx0
 
     shyk = c[_RHY1] + c[_RHY2] * dfz
-    byk = c[_RBY1] * math.cos(math.atan(c[_RBY2] * (a - c[_RBY3])))
+    byk = c[_RBY1] * _cos_atan(c[_RBY2] * (a - c[_RBY3]))
     cyk = c[_RCY1]
     eyk = c[_REY1] + c[_REY2] * dfz
     if eyk > 1.0:
         eyk = 1.0
     s1 = byk * (k + shyk)
     s0 = byk * shyk
-    gyk = (math.cos(cyk * math.atan(s1 - eyk * (s1 - math.atan(s1))))
-           / math.cos(cyk * math.atan(s0 - eyk * (s0 - math.atan(s0)))))
+    gyk = (math.cos(cyk * math.atan(_curved(s1, eyk)))
+           / (math.cos(cyk * math.atan(_curved(s0, eyk))) if shyk != 0.0 else 1.0))
     if gyk < 0.0:
         gyk = 0.0
-    dvyk = muy * fz_n * (c[_RVY1] + c[_RVY2] * dfz) * math.cos(math.atan(c[_RVY4] * a))
-    svyk = dvyk * math.sin(c[_RVY5] * math.atan(c[_RVY6] * k))
+    rvy = c[_RVY1] + c[_RVY2] * dfz
+    svyk = 0.0
+    if rvy != 0.0:
+        dvyk = muy * fz_n * rvy * _cos_atan(c[_RVY4] * a)
+        svyk = dvyk * math.sin(c[_RVY5] * math.atan(c[_RVY6] * k))
     fy = gyk * fy0 + svyk
 
     # ---- aligning moment (equivalent slip angles)
@@ -229,7 +255,8 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
     at = a + sht
     shf = shy + (svy / kya if kya != 0.0 else 0.0)
     ar = a + shf
-    kratio2 = (kxk / kya) ** 2 * k * k if kya != 0.0 else 0.0
+    kratio = kxk / kya if kya != 0.0 else 0.0
+    kratio2 = kratio * kratio * k * k
     at_eq = math.sqrt(at * at + kratio2)
     if at < 0.0:
         at_eq = -at_eq
@@ -239,15 +266,19 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
     bt = c[_QBZ1] + c[_QBZ2] * dfz + c[_QBZ3] * dfz * dfz
     ct = c[_QCZ1]
     dt = fz_n * (c[_QDZ1] + c[_QDZ2] * dfz) * r0 / fz0
-    et = ((c[_QEZ1] + c[_QEZ2] * dfz + c[_QEZ3] * dfz * dfz)
-          * (1.0 + c[_QEZ4] * _TWO_OVER_PI * math.atan(bt * ct * at)))
+    et = c[_QEZ1] + c[_QEZ2] * dfz + c[_QEZ3] * dfz * dfz
+    if c[_QEZ4] != 0.0:
+        et *= 1.0 + c[_QEZ4] * _TWO_OVER_PI * math.atan(bt * ct * at)
     if et > 1.0:
         et = 1.0
     bta = bt * at_eq
     trail = dt * math.cos(ct * math.atan(bta - et * (bta - math.atan(bta)))) * cos_a
     br = c[_QBZ9] + c[_QBZ10] * by * cy
-    dr = mu * fz_n * r0 * (c[_QDZ6] + c[_QDZ7] * dfz)
-    mzr = dr * math.cos(math.atan(br * ar_eq)) * cos_a
+    qdz = c[_QDZ6] + c[_QDZ7] * dfz
+    mzr = 0.0
+    if qdz != 0.0:
+        dr = mu * fz_n * r0 * qdz
+        mzr = dr * _cos_atan(br * ar_eq) * cos_a
     arm = r0 * (c[_SSZ1] + c[_SSZ2] * fy / fz0)
     mz = -trail * (fy - svyk) + mzr + arm * fx
     return fx, fy, mz
