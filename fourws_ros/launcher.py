@@ -25,7 +25,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, TextIO
 
@@ -165,21 +165,6 @@ class Child:
         except OSError:
             return ""
         return "\n".join(text[-lines:])
-
-
-@dataclass
-class RunOutcome:
-    """How a launched run ended."""
-
-    ok: bool
-    reason: str
-    sim_time_s: float = 0.0
-    wall_time_s: float = 0.0
-    max_lateness_s: float = 0.0
-    overruns: int = 0
-    stale_commands: int = 0
-    exit_codes: dict[str, int | None] = field(default_factory=dict)
-    events: list[str] = field(default_factory=list)
 
 
 class Launcher:
