@@ -134,8 +134,41 @@ HAS_FORCES4 = hasattr(_TIRE_MODULE, "forces4")
 _forces4 = _jit_inline(getattr(_TIRE_MODULE, "forces4", _forces4_by_wheel))
 
 
-def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
-    """dx/dt into ``dx`` and per-wheel quantities into ``aux`` (see ``eightdof.Kernels``)."""
+def _parameter_terms(q):  # type: ignore[no-untyped-def]
+    """Terms of the right-hand side that depend on the parameters only (computed once per
+    kernel call), each by the same operations in the same order as written out in ``rhs``
+    before, so the results are unchanged."""
+    m = q[k_m]
+    ms = q[k_ms]
+    g = q[k_g]
+    a = q[k_a]
+    b = q[k_b]
+    L = a + b
+    mu_ = m - ms
+    m_front = m * b / L
+    m_rear = m * a / L
+    msh = ms * q[k_h]
+    return (L,
+            0.5 * m,  # d_long = 0.5 m ax h_cg / L
+            m_front * (ms / m) * q[k_rcf],  # front roll-centre lateral transfer per ay
+            m_front * (mu_ / m) * q[k_hu],  # front unsprung lateral transfer per ay
+            m_rear * (ms / m) * q[k_rcr],
+            m_rear * (mu_ / m) * q[k_hu],
+            m * g * b / (2.0 * L),  # static load of a front tire
+            m * g * a / (2.0 * L),  # static load of a rear tire
+            msh,
+            msh * g,
+            q[k_kf] + q[k_kr],
+            q[k_cf] + q[k_cr],
+            q[k_ixz] * q[k_ixz] / q[k_iz])
+
+
+_P_L, _P_HALF_M, _P_RCF, _P_HUF, _P_RCR, _P_HUR, _P_STF, _P_STR = 0, 1, 2, 3, 4, 5, 6, 7
+_P_MSH, _P_MSHG, _P_KPHI, _P_CPHI, _P_IXZ2 = 8, 9, 10, 11, 12
+
+
+def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
+    """``rhs`` with the parameter-only terms ``pt = _parameter_terms(q)`` given."""
     U = x[i_u]
     V = x[i_v]
     r = x[i_r]
@@ -143,11 +176,9 @@ def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     pr = x[i_p]
     psi = x[i_psi]
     m = q[k_m]
-    ms = q[k_ms]
-    g = q[k_g]
     a = q[k_a]
     b = q[k_b]
-    L = a + b
+    L = pt[_P_L]
     tf = q[k_tf]
     tr = q[k_tr]
     rw = q[k_rw]
@@ -155,20 +186,15 @@ def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     vmin = q[k_vmin]
     sigma = q[k_sig]
     mu = q[k_mu]
-    mu_ = m - ms
     delta_f = u[j_df] + q[k_ef] * phi
     delta_r = u[j_dr] + q[k_er] * phi
     ax_lt = x[i_ax]
     ay_lt = x[i_ay]
-    d_long = 0.5 * m * ax_lt * q[k_hcg] / L
-    m_front = m * b / L
-    m_rear = m * a / L
-    d_lat_f = (q[k_kf] * phi + q[k_cf] * pr + m_front * (ms / m) * q[k_rcf] * ay_lt
-               + m_front * (mu_ / m) * q[k_hu] * ay_lt) / tf
-    d_lat_r = (q[k_kr] * phi + q[k_cr] * pr + m_rear * (ms / m) * q[k_rcr] * ay_lt
-               + m_rear * (mu_ / m) * q[k_hu] * ay_lt) / tr
-    st_f = m * g * b / (2.0 * L)
-    st_r = m * g * a / (2.0 * L)
+    d_long = pt[_P_HALF_M] * ax_lt * q[k_hcg] / L
+    d_lat_f = (q[k_kf] * phi + q[k_cf] * pr + pt[_P_RCF] * ay_lt + pt[_P_HUF] * ay_lt) / tf
+    d_lat_r = (q[k_kr] * phi + q[k_cr] * pr + pt[_P_RCR] * ay_lt + pt[_P_HUR] * ay_lt) / tr
+    st_f = pt[_P_STF]
+    st_r = pt[_P_STR]
     cdf = math.cos(delta_f)
     sdf = math.sin(delta_f)
     cdr = math.cos(delta_r)
@@ -276,14 +302,13 @@ def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
             dx[i_w0 + i] = 0.0
     c = math.cos(phi)
     s = math.sin(phi)
-    msh = ms * q[k_h]
+    msh = pt[_P_MSH]
     mshc = msh * c
     iz = q[k_iz]
     ixz = q[k_ixz]
     rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
-    rhs_l = (mshc * U * r + msh * g * s - (q[k_kf] + q[k_kr]) * phi
-             - (q[k_cf] + q[k_cr]) * pr)
-    det = q[k_ix] - mshc * mshc / m - ixz * ixz / iz
+    rhs_l = mshc * U * r + pt[_P_MSHG] * s - pt[_P_KPHI] * phi - pt[_P_CPHI] * pr
+    det = q[k_ix] - mshc * mshc / m - pt[_P_IXZ2]
     pd = (rhs_l + mshc * rhs_y / m + ixz * sum_n / iz) / det
     vd = (rhs_y + mshc * pd) / m
     rd = (sum_n + ixz * pd) / iz
@@ -308,8 +333,14 @@ def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     aux[a_ay] = ay
 
 
+def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
+    """dx/dt into ``dx`` and per-wheel quantities into ``aux`` (see ``eightdof.Kernels``)."""
+    _rhs_inline(x, u, q, _parameter_terms_inline(q), cf, cr, dx, aux)
+
+
+_parameter_terms_inline = _jit_inline(_parameter_terms)
+_rhs_inline = _jit_inline(_rhs_terms)
 rhs = _jit(_rhs)
-_rhs_inline = _jit_inline(_rhs)
 
 #: Rows of the integrators' work array: the four RK4 stage derivatives, the stage state.
 _K1, _K2, _K3, _K4, _XT = 0, 1, 2, 3, 4
@@ -320,6 +351,7 @@ def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
     work = np.empty((5, N_STATE))
     aux = np.empty(N_AUX)
     xt = work[_XT]
+    pt = _parameter_terms_inline(q)
     half = 0.5 * dt
     sixth = dt / 6.0
     for step in range(n):
@@ -327,13 +359,13 @@ def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
         # x + h_s k_{s-1} with h = dt/2, dt/2, dt)
         for stage in range(4):
             if stage == 0:
-                _rhs_inline(x, u, q, cf, cr, work[_K1], aux)
+                _rhs_inline(x, u, q, pt, cf, cr, work[_K1], aux)
             else:
                 h = dt if stage == 3 else half
                 kp = work[stage - 1]
                 for j in range(N_STATE):
                     xt[j] = x[j] + h * kp[j]
-                _rhs_inline(xt, u, q, cf, cr, work[stage], aux)
+                _rhs_inline(xt, u, q, pt, cf, cr, work[stage], aux)
         k1 = work[_K1]
         k2 = work[_K2]
         k3 = work[_K3]
@@ -356,8 +388,9 @@ def euler(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
     aux = np.empty(N_AUX)
     k1 = work[0]
     xt = work[1]
+    pt = _parameter_terms_inline(q)
     for step in range(n):
-        _rhs_inline(x, u, q, cf, cr, k1, aux)
+        _rhs_inline(x, u, q, pt, cf, cr, k1, aux)
         ok = True
         for j in range(N_STATE):
             xt[j] = x[j] + dt * k1[j]
