@@ -239,6 +239,7 @@ class Launcher:
                 break
             try:
                 os.killpg(proc.pid, sig)
+                os.killpg(proc.pid, signal.SIGCONT)  # a stopped node must run to handle it
             except ProcessLookupError:
                 break
             try:
@@ -656,6 +657,11 @@ def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = 
         if bad:
             ok, reason = False, "; ".join(launcher.describe_exit(launcher.child(n))
                                           for n in bad)
+    if ok and state["stale"]:
+        ok, reason = False, (
+            f"the controller did not answer or sent unusable commands for {state['stale']} "
+            f"control ticks (zero rear steer applied then; see "
+            f"{launcher.log_dir / NODE_NAMES['simulator']}.log)")
     counts = _bag_counts(bag_path) if bag_path is not None else {}
     sim_time = float(state["sim_time_s"])
     running = float(state.get("t_end", time.monotonic()) - state.get("t_start", wall_start))

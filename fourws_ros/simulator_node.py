@@ -394,16 +394,18 @@ class SimulatorNode(Node):
                 self.get_logger().warning(f"no driver input for step {state.step}",
                                           throttle_duration_sec=5.0)
             return
-        if not have_cmd and not timed_out:
+        # once the controller has missed a tick it is not waited for again until it answers
+        # the current tick (a stopped controller must not cost a timeout per tick)
+        if not have_cmd and not timed_out and not self.command_timed_out:
             return
         rear = self.rear_cmd_rad if have_cmd else 0.0
         self.command_timed_out = not have_cmd
         if not have_cmd:
             self.stale_commands += 1
             self.get_logger().warning(
-                f"no rear-steer command for step {state.step} within "
-                f"{self._cfg['command_timeout_s']} s: zero rear steer ({self.stale_commands} "
-                "timed-out ticks)", throttle_duration_sec=1.0)
+                f"no rear-steer command for step {state.step} (t = {state.sim_time_s:.2f} s) "
+                f"within {self._cfg['command_timeout_s']} s: zero rear steer "
+                f"({self.stale_commands} ticks so far)", throttle_duration_sec=1.0)
         self._awaiting = None
         now = time.perf_counter()
         self.answer_wait_s += now - self._sent_at

@@ -239,3 +239,19 @@ def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
     state = run.topics[topics.STATE]
     assert len(state) > 10  # the run up to the signal, at 100 Hz from t = 0
     np.testing.assert_allclose(np.diff(state.time_s), 0.01, atol=1e-9)  # none lost
+
+
+def test_controller_that_stops_answering_fails_the_run(tmp_path):
+    def freeze_controller(launcher):
+        launcher.child("fourws_controller").proc.send_signal(signal.SIGSTOP)
+
+    sc = _scenario(duration_s=2.0)
+    run = run_graph(sc, "sol1", tmp_path, run_name="frozen", on_running=freeze_controller)
+    assert not run.ok and "controller did not answer" in run.reason
+    bag = load_bag(run.bag_path)
+    state = bag.topics[topics.STATE]
+    # the run went on to the end with zero rear steer, one timeout (1 s) and no more waits
+    assert len(state) == int(round(2.0 / sc.control_period_s)) + 1
+    cmds = len(bag.topics[topics.REAR_STEER_CMD])
+    assert run.stale_commands == len(state) - 1 - cmds
+    assert run.exit_codes["fourws_controller"] is not None  # the stopped process was ended
