@@ -181,9 +181,11 @@ _C1, _C2, _C3, _C4 = int(COEF.C1), int(COEF.C2), int(COEF.C3), int(COEF.C4)
 _G1, _G2, _KMU = int(COEF.G1), int(COEF.G2), int(COEF.KMU)
 
 
+#: Pounds-force per newton.
+_LBF_PER_N = 1.0 / N_PER_LBF
 #: ``_prepare``'s result for a tire that gives no force (no load, no friction, no slip);
-#: g = fz = den = 1 keep the passes free of 0/0.
-_NO_FORCE = (False, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0)
+#: fz = den = 1 keep the passes free of 0/0.
+_NO_FORCE = (False, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 
 
 # The model is split into three phases (numba-compilable helpers, also plain Python) so that
@@ -193,11 +195,13 @@ _NO_FORCE = (False, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0)
 @register_jitable(error_model="numpy")
 def _prepare(fz_n: float, alpha_rad: float, kappa: float, mu: float,
              coeffs: np.ndarray) -> tuple[bool, float, float, float, float, float, float,
-                                          float, float]:
-    """Load and slip terms: (valid, Fz lb, a_p0 ft, mu at sliding, gx, gy, g, h, den)."""
+                                          float]:
+    """Load and slip terms: (valid, Fz lb, a_p0 ft, ux, uy, kq, h, den), where
+    ``(Fx_b, Fy) = Fz f (ux, uy)`` and the contact-length ratio under that force is
+    ``1 - kq f``."""
     if not (fz_n > 0.0 and mu > 0.0):
         return _NO_FORCE
-    fz = fz_n / N_PER_LBF
+    fz = fz_n * _LBF_PER_N
     ap0 = (_AP_CONSTANT * math.sqrt(fz * coeffs[_FZT])
            / (coeffs[_TW] * (coeffs[_TP] + _AP_PRESSURE_OFFSET_PSI)))
     a1 = coeffs[_A1]
@@ -232,20 +236,21 @@ def _prepare(fz_n: float, alpha_rad: float, kappa: float, mu: float,
     hx = c_s * s * ca
     h = 0.25 * math.pi * math.sqrt(gy * gy + hx * hx)
     den = mu0 * fz * ca
-    return True, fz, ap0, mu_slide, gx, gy, g, h, den
+    # force per Fz f: mu_slide (gx, gy)/g; g >= 2e-162 here (g^2 > 0), so the quotient is finite
+    ig = mu_slide / g
+    ux = ig * gx
+    uy = ig * gy
+    # a_p/a_p0 = 1 - KA |Fx_b|/Fz = 1 - KA |ux| f
+    return True, fz, ap0, ux, uy, coeffs[_KA] * abs(ux), h, den
 
 
 @register_jitable(error_model="numpy")
-def _pass(p: tuple[bool, float, float, float, float, float, float, float, float], ratio: float,
-          coeffs: np.ndarray) -> tuple[float, float, float, float]:
-    """One evaluation at contact-length ratio ``a_p/a_p0 = ratio``: (f, magnitude lb,
-    Fx_b lb, the ratio the resulting Fx gives)."""
-    fz = p[1]
-    mu_slide = p[3]
-    gx = p[4]
-    g = p[6]
-    h = p[7]
-    den = p[8]
+def _pass(p: tuple[bool, float, float, float, float, float, float, float], ratio: float,
+          coeffs: np.ndarray) -> tuple[float, float]:
+    """One evaluation at contact-length ratio ``a_p/a_p0 = ratio``: (f, the ratio that the
+    resulting Fx gives)."""
+    h = p[6]
+    den = p[7]
     c1 = coeffs[_C1]
     c2 = coeffs[_C2]
     c3 = coeffs[_C3]
@@ -262,32 +267,28 @@ def _pass(p: tuple[bool, float, float, float, float, float, float, float, float]
         u = den / num  # 1/sigma in [0, 1): the sigma -> infinity limit stays finite
         u2 = u * u
         f = (c1 + c2 * u + _F_SLOPE * u2) / (c1 + c3 * u + c4 * u2 + u2 * u)
-    mag = mu_slide * fz * f
-    fx_b = mag * gx / g
-    new_ratio = 1.0 - coeffs[_KA] * abs(fx_b) / fz
+    new_ratio = 1.0 - p[5] * f
     if new_ratio < 0.0:
         new_ratio = 0.0
-    return f, mag, fx_b, new_ratio
+    return f, new_ratio
 
 
 @register_jitable(error_model="numpy")
-def _finish(p: tuple[bool, float, float, float, float, float, float, float, float], f: float,
-            mag: float, fx_b: float, ratio: float,
-            coeffs: np.ndarray) -> tuple[float, float, float]:
+def _finish(p: tuple[bool, float, float, float, float, float, float, float], f: float,
+            ratio: float, coeffs: np.ndarray) -> tuple[float, float, float]:
     """Forces and moment in fourws' frame and units from the last pass."""
     if not p[0]:
         return 0.0, 0.0, 0.0
-    ap0 = p[2]
-    fy_b = mag * p[5] / p[6]
+    fzf = p[1] * f
     # original model: Fy positive for positive alpha, Fx_b positive braking; fourws frame:
-    fx_lb = -fx_b
-    fy_lb = -fy_b
+    fx_lb = -fzf * p[3]
+    fy_lb = -fzf * p[4]
     decay = 1.0 - f
     if decay < 0.0:
         decay = 0.0
     g2 = coeffs[_G2]
     shape = decay if g2 == 1.0 else decay ** g2  # pow only when G2 is not Table C.1's 1.0
-    trail_ft = coeffs[_G1] * _TRAIL_PER_LENGTH * ap0 * ratio * shape
+    trail_ft = coeffs[_G1] * _TRAIL_PER_LENGTH * p[2] * ratio * shape
     mz_ftlb = -trail_ft * fy_lb + coeffs[_K1] * fx_lb * fy_lb
     return fx_lb * N_PER_LBF, fy_lb * N_PER_LBF, mz_ftlb * N_PER_LBF * M_PER_FT
 
@@ -321,11 +322,11 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
     p = _prepare(fz_n, alpha_rad, kappa, mu, coeffs)
     # pass 0 at a_p = a_p0 (Fx = 0); pass 1 with the Fx of pass 0 unless it has none (or
     # KA = 0); the trail takes the ratio that pass 1's Fx gives
-    f, mag, fx_b, ratio1 = _pass(p, 1.0, coeffs)
+    f, ratio1 = _pass(p, 1.0, coeffs)
     ratio = 1.0
     if ratio1 != ratio:
-        f, mag, fx_b, ratio = _pass(p, ratio1, coeffs)
-    return _finish(p, f, mag, fx_b, ratio, coeffs)
+        f, ratio = _pass(p, ratio1, coeffs)
+    return _finish(p, f, ratio, coeffs)
 
 
 def forces4(fz_n: np.ndarray, alpha_rad: np.ndarray, kappa: np.ndarray, vx_mps: np.ndarray,
@@ -343,26 +344,26 @@ def forces4(fz_n: np.ndarray, alpha_rad: np.ndarray, kappa: np.ndarray, vx_mps: 
     p1 = _prepare(fz_n[1], alpha_rad[1], kappa[1], mu, cf)
     p2 = _prepare(fz_n[2], alpha_rad[2], kappa[2], mu, cr)
     p3 = _prepare(fz_n[3], alpha_rad[3], kappa[3], mu, cr)
-    f0, m0, x0, s0 = _pass(p0, 1.0, cf)
-    f1, m1, x1, s1 = _pass(p1, 1.0, cf)
-    f2, m2, x2, s2 = _pass(p2, 1.0, cr)
-    f3, m3, x3, s3 = _pass(p3, 1.0, cr)
+    f0, s0 = _pass(p0, 1.0, cf)
+    f1, s1 = _pass(p1, 1.0, cf)
+    f2, s2 = _pass(p2, 1.0, cr)
+    f3, s3 = _pass(p3, 1.0, cr)
     r0 = 1.0
     r1 = 1.0
     r2 = 1.0
     r3 = 1.0
     if s0 != r0:
-        f0, m0, x0, r0 = _pass(p0, s0, cf)
+        f0, r0 = _pass(p0, s0, cf)
     if s1 != r1:
-        f1, m1, x1, r1 = _pass(p1, s1, cf)
+        f1, r1 = _pass(p1, s1, cf)
     if s2 != r2:
-        f2, m2, x2, r2 = _pass(p2, s2, cr)
+        f2, r2 = _pass(p2, s2, cr)
     if s3 != r3:
-        f3, m3, x3, r3 = _pass(p3, s3, cr)
-    fx_n[0], fy_n[0], mz_nm[0] = _finish(p0, f0, m0, x0, r0, cf)
-    fx_n[1], fy_n[1], mz_nm[1] = _finish(p1, f1, m1, x1, r1, cf)
-    fx_n[2], fy_n[2], mz_nm[2] = _finish(p2, f2, m2, x2, r2, cr)
-    fx_n[3], fy_n[3], mz_nm[3] = _finish(p3, f3, m3, x3, r3, cr)
+        f3, r3 = _pass(p3, s3, cr)
+    fx_n[0], fy_n[0], mz_nm[0] = _finish(p0, f0, r0, cf)
+    fx_n[1], fy_n[1], mz_nm[1] = _finish(p1, f1, r1, cf)
+    fx_n[2], fy_n[2], mz_nm[2] = _finish(p2, f2, r2, cr)
+    fx_n[3], fy_n[3], mz_nm[3] = _finish(p3, f3, r3, cr)
 
 
 def cornering_stiffness_analytic(coeffs: np.ndarray, fz_n: float) -> float:
