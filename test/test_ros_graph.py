@@ -253,5 +253,7 @@ def test_controller_that_stops_answering_fails_the_run(tmp_path):
     # the run went on to the end with zero rear steer, one timeout (1 s) and no more waits
     assert len(state) == int(round(2.0 / sc.control_period_s)) + 1
     cmds = len(bag.topics[topics.REAR_STEER_CMD])
-    assert run.stale_commands == len(state) - 1 - cmds
+    # every tick without a command counted (a command racing the freeze may arrive after its
+    # tick timed out: recorded, yet the tick counts as missed)
+    assert len(state) - 1 - cmds <= run.stale_commands <= len(state) - 1 - cmds + 1
     assert run.exit_codes["fourws_controller"] is not None  # the stopped process was ended
