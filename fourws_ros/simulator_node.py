@@ -52,6 +52,9 @@ from fourws_sim.errors import FourwsError, NonFiniteError, ParameterError, Unkno
 CLOCK_MODES = ("lockstep", "realtime")
 #: Shortest/longest integration step a parameter may set, s.
 MIN_STEP_S, MAX_STEP_S = 1e-5, 0.1
+#: Lockstep: wall time to wait for the controller after it has missed a tick, s (a healthy
+#: controller answers within ~1 ms).
+LOST_WAIT_S = 0.02
 #: Step-lateness histogram (realtime): bin width, s, and bin count (the last bin collects
 #: everything later than 20 ms).
 LATENESS_BIN_S = 1e-5
@@ -129,7 +132,7 @@ class SimulatorNode(Node):
         self._lock = threading.Lock()
         self._rt_thread: threading.Thread | None = None
         self._reset_state()
-        self._timer = self.create_timer(0.02, self._housekeeping)
+        self._timer = self.create_timer(LOST_WAIT_S / 2, self._housekeeping)
         self.get_logger().info(
             f"{self.model_name} on {self.vehicle.name}, {self.clock_mode}, dt "
             f"{self.dt_s} s, control {self.control_period_s} s"
@@ -328,7 +331,11 @@ class SimulatorNode(Node):
             return
         if self.clock_mode == "lockstep" and self._awaiting is not None:
             waited = time.monotonic() - self._await_since
-            if waited > self._cfg["command_timeout_s"]:
+            # once the controller has missed a tick, the following ones wait only
+            # LOST_WAIT_S (a stopped controller must not cost a full timeout per tick; one
+            # that answers again within it is back in the loop)
+            limit = LOST_WAIT_S if self.command_timed_out else self._cfg["command_timeout_s"]
+            if waited > limit:
                 self._lockstep_try_advance(timed_out=True)
 
     def _graph_ready(self) -> bool:
@@ -394,9 +401,7 @@ class SimulatorNode(Node):
                 self.get_logger().warning(f"no driver input for step {state.step}",
                                           throttle_duration_sec=5.0)
             return
-        # once the controller has missed a tick it is not waited for again until it answers
-        # the current tick (a stopped controller must not cost a timeout per tick)
-        if not have_cmd and not timed_out and not self.command_timed_out:
+        if not have_cmd and not timed_out:
             return
         rear = self.rear_cmd_rad if have_cmd else 0.0
         self.command_timed_out = not have_cmd
