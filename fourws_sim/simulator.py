@@ -129,6 +129,7 @@ class Simulator:
         self._n_input = len(self.model.INPUT)
         self._u = np.zeros(self._n_input)
         self._u_shape = (self._n_input,)
+        self._u_held = np.zeros(self._n_input)  # the fast path's held input (see step)
         self._kernel = None
         if self._is_8dof:
             from fourws_sim.models import eightdof
@@ -294,14 +295,13 @@ class Simulator:
         if (self._kernel is not None and type(u) is np.ndarray and type(n_steps) is int
                 and u.shape == self._u_shape and u.dtype == _FLOAT64 and n_steps >= 0):
             # fast path (the simulator node's call at every tick): a float64 vector in INPUT
-            # order whose values pass the cheap checks of input_vector; anything else,
-            # including every error, takes the general path below
-            arr = u.copy()  # the caller may reuse u; outputs() reads the held input
-            values = arr.tolist()
-            if math.isfinite(sum(values)) and min(values[self._brakes]) >= 0.0:
-                self._u = arr
-                done = int(self._kernel(self._x, arr, self._q, self._cf, self._cr, self.dt_s,
-                                        n_steps))
+            # order; the compiled loop checks it as input_vector does and copies it into the
+            # held-input buffer (the caller may reuse u; outputs() reads the held input).
+            # A rejected input (-1, nothing done) takes the general path below for its error.
+            done = int(self._kernel(self._x, u, self._q, self._cf, self._cr, self.dt_s,
+                                    n_steps, self._u_held))
+            if done >= 0:
+                self._u = self._u_held
                 self._step += done
                 self._t = self._step * self.dt_s
                 if done < n_steps:

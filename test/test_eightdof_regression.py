@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from fourws_sim.models import eightdof
-from fourws_sim.models.eightdof import INPUT
+from fourws_sim.models.eightdof import INPUT, STATE
 from fourws_sim.params import load_vehicle
 from fourws_sim.simulator import Simulator
 
@@ -268,3 +268,10 @@ def test_vector_fast_path_checks_like_the_general_path() -> None:
         other.step(u.tolist(), 10)
     assert np.array_equal(sim.state, other.state)
     assert sim.step_count == other.step_count == 200
+    u[INPUT.DELTA_F] = 0.5  # the caller reusing its vector does not change the held input
+    mine, ref = sim.outputs(), other.outputs()
+    for name in ("front_wheel_angle_rad", "lateral_accel_mps2", "yaw_rate_radps"):
+        assert mine[name] == ref[name], name
+    eps_f = eightdof.params_for(sim.vehicle).arr[eightdof.PARAM.EPS_F]  # roll steer
+    assert mine["front_wheel_angle_rad"] == pytest.approx(0.02 + eps_f * sim.state[STATE.PHI],
+                                                          rel=1e-12)

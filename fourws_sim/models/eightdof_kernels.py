@@ -31,7 +31,7 @@ import numpy as np
 from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA_F,
                                         _AUX_DELTA_R, _AUX_FX, _AUX_FY, _AUX_FZ, _AUX_KAPPA,
                                         _AUX_MZ, HELD_SPIN_FLOOR_RADPS, INPUT, N_AUX,
-                                        N_STATE, PARAM, STATE)
+                                        N_INPUT, N_STATE, PARAM, STATE)
 from fourws_sim.tires import get_tire
 
 #: Tire model of this variant (set by ``kernels_for`` before the module body runs).
@@ -346,8 +346,32 @@ rhs = _jit(_rhs)
 _K1, _K2, _K3, _K4, _XT = 0, 1, 2, 3, 4
 
 
-def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
-    """``n`` RK4 steps in place; returns the number of finite steps done."""
+def _take_input(u, u_held):  # type: ignore[no-untyped-def]
+    """Check ``u`` as ``Simulator.input_vector`` does (every component finite, brake torques
+    >= 0) and copy it into ``u_held``; False (nothing copied) if it fails."""
+    for j in range(N_INPUT):
+        if not math.isfinite(u[j]):
+            return False
+    for i in range(4):
+        if u[j_b0 + i] < 0.0:
+            return False
+    for j in range(N_INPUT):
+        u_held[j] = u[j]
+    return True
+
+
+_take_input_inline = _jit_inline(_take_input)
+
+
+def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
+    """``n`` RK4 steps in place; returns the number of finite steps done.
+
+    With ``u_held`` (the simulator's fast path: one compiled call per tick), ``u`` is first
+    checked and copied into ``u_held`` (:func:`_take_input`); -1 and no step if it fails.
+    """
+    if u_held is not None:
+        if not _take_input_inline(u, u_held):
+            return -1
     work = np.empty((5, N_STATE))
     aux = np.empty(N_AUX)
     xt = work[_XT]
@@ -382,8 +406,12 @@ def rk4(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
     return n
 
 
-def euler(x, u, q, cf, cr, dt, n):  # type: ignore[no-untyped-def]
-    """``n`` explicit-Euler steps in place; returns the number of finite steps done."""
+def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
+    """``n`` explicit-Euler steps in place; returns the number of finite steps done (the same
+    ``u_held`` option as :func:`rk4`)."""
+    if u_held is not None:
+        if not _take_input_inline(u, u_held):
+            return -1
     work = np.empty((2, N_STATE))
     aux = np.empty(N_AUX)
     k1 = work[0]
