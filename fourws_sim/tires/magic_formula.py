@@ -224,8 +224,9 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
         exa = 1.0
     s1 = bxa * (a + shxa)
     s0 = bxa * shxa
-    gxa = (math.cos(cxa * math.atan(_curved(s1, exa)))
-           / (math.cos(cxa * math.atan(_curved(s0, exa))) if shxa != 0.0 else 1.0))
+    gxa = math.cos(cxa * math.atan(_curved(s1, exa)))
+    if shxa != 0.0:  # with no shift the normalizing cosine is cos(0) = 1
+        gxa /= math.cos(cxa * math.atan(_curved(s0, exa)))
     if gxa < 0.0:
         gxa = 0.0
     fx = gxa * fx0
@@ -238,8 +239,9 @@ def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float
         eyk = 1.0
     s1 = byk * (k + shyk)
     s0 = byk * shyk
-    gyk = (math.cos(cyk * math.atan(_curved(s1, eyk)))
-           / (math.cos(cyk * math.atan(_curved(s0, eyk))) if shyk != 0.0 else 1.0))
+    gyk = math.cos(cyk * math.atan(_curved(s1, eyk)))
+    if shyk != 0.0:
+        gyk /= math.cos(cyk * math.atan(_curved(s0, eyk)))
     if gyk < 0.0:
         gyk = 0.0
     rvy = c[_RVY1] + c[_RVY2] * dfz
