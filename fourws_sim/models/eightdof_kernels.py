@@ -160,11 +160,22 @@ def _parameter_terms(q):  # type: ignore[no-untyped-def]
             msh * g,
             q[k_kf] + q[k_kr],
             q[k_cf] + q[k_cr],
-            q[k_ixz] * q[k_ixz] / q[k_iz])
+            q[k_ixz] * q[k_ixz] / q[k_iz],
+            # reciprocals: a division by a parameter is a multiplication (equal to round-off)
+            1.0 / L,
+            1.0 / q[k_tf],
+            1.0 / q[k_tr],
+            1.0 / q[k_sig] if q[k_sig] > 0.0 else 0.0,
+            1.0 / q[k_iw],
+            1.0 / m,
+            1.0 / q[k_iz],
+            1.0 / q[k_tlt])
 
 
 _P_L, _P_HALF_M, _P_RCF, _P_HUF, _P_RCR, _P_HUR, _P_STF, _P_STR = 0, 1, 2, 3, 4, 5, 6, 7
 _P_MSH, _P_MSHG, _P_KPHI, _P_CPHI, _P_IXZ2 = 8, 9, 10, 11, 12
+_P_INV_L, _P_INV_TF, _P_INV_TR, _P_INV_SIGMA, _P_INV_IW = 13, 14, 15, 16, 17
+_P_INV_M, _P_INV_IZ, _P_INV_TLT = 18, 19, 20
 
 
 def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
@@ -178,11 +189,11 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     m = q[k_m]
     a = q[k_a]
     b = q[k_b]
-    L = pt[_P_L]
     tf = q[k_tf]
     tr = q[k_tr]
     rw = q[k_rw]
     iw = q[k_iw]
+    inv_iw = pt[_P_INV_IW]
     vmin = q[k_vmin]
     sigma = q[k_sig]
     mu = q[k_mu]
@@ -190,9 +201,11 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     delta_r = u[j_dr] + q[k_er] * phi
     ax_lt = x[i_ax]
     ay_lt = x[i_ay]
-    d_long = pt[_P_HALF_M] * ax_lt * q[k_hcg] / L
-    d_lat_f = (q[k_kf] * phi + q[k_cf] * pr + pt[_P_RCF] * ay_lt + pt[_P_HUF] * ay_lt) / tf
-    d_lat_r = (q[k_kr] * phi + q[k_cr] * pr + pt[_P_RCR] * ay_lt + pt[_P_HUR] * ay_lt) / tr
+    d_long = pt[_P_HALF_M] * ax_lt * q[k_hcg] * pt[_P_INV_L]
+    d_lat_f = ((q[k_kf] * phi + q[k_cf] * pr + pt[_P_RCF] * ay_lt + pt[_P_HUF] * ay_lt)
+               * pt[_P_INV_TF])
+    d_lat_r = ((q[k_kr] * phi + q[k_cr] * pr + pt[_P_RCR] * ay_lt + pt[_P_HUR] * ay_lt)
+               * pt[_P_INV_TR])
     st_f = pt[_P_STF]
     st_r = pt[_P_STR]
     cdf = math.cos(delta_f)
@@ -233,11 +246,12 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         vy = -vxb * sd + vyb * cd
         avx = abs(vx)
         den = avx if avx > vmin else vmin
-        alpha = math.atan(vy / den)  # den > 0: atan2(vy, den) without the quadrant logic
-        kappa = (x[i_w0 + i] * rw - vx) / den
+        inv_den = 1.0 / den  # den >= v_min > 0
+        alpha = math.atan(vy * inv_den)  # atan2(vy, den) without the quadrant logic
+        kappa = (x[i_w0 + i] * rw - vx) * inv_den
         if sigma > 0.0:
             al_lag = x[i_al0 + i]
-            dx[i_al0 + i] = den / sigma * (alpha - al_lag)
+            dx[i_al0 + i] = den * pt[_P_INV_SIGMA] * (alpha - al_lag)
             alpha_t = al_lag
         else:
             dx[i_al0 + i] = 0.0
@@ -291,11 +305,11 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
                 t_other -= cap
             elif om < 0.0:
                 t_other += cap
-            dx[i_w0 + i] = t_other / iw
+            dx[i_w0 + i] = t_other * inv_iw
         elif t_other > cap:  # stuck band, breaking loose forwards
-            dx[i_w0 + i] = (t_other - cap) / iw
+            dx[i_w0 + i] = (t_other - cap) * inv_iw
         elif t_other < -cap:  # stuck band, breaking loose backwards
-            dx[i_w0 + i] = (t_other + cap) / iw
+            dx[i_w0 + i] = (t_other + cap) * inv_iw
         elif abs(om) > HELD_FLOOR:  # stuck band, held: the spin decays to zero
             dx[i_w0 + i] = -om / q[k_tb] * (1.0 - abs(t_other) / cap)
         else:
@@ -304,15 +318,16 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     s = math.sin(phi)
     msh = pt[_P_MSH]
     mshc = msh * c
-    iz = q[k_iz]
     ixz = q[k_ixz]
     rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
     rhs_l = mshc * U * r + pt[_P_MSHG] * s - pt[_P_KPHI] * phi - pt[_P_CPHI] * pr
-    det = q[k_ix] - mshc * mshc / m - pt[_P_IXZ2]
-    pd = (rhs_l + mshc * rhs_y / m + ixz * sum_n / iz) / det
-    vd = (rhs_y + mshc * pd) / m
-    rd = (sum_n + ixz * pd) / iz
-    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
+    inv_m = pt[_P_INV_M]
+    inv_iz = pt[_P_INV_IZ]
+    det = q[k_ix] - mshc * mshc * inv_m - pt[_P_IXZ2]
+    pd = (rhs_l + mshc * rhs_y * inv_m + ixz * sum_n * inv_iz) / det
+    vd = (rhs_y + mshc * pd) * inv_m
+    rd = (sum_n + ixz * pd) * inv_iz
+    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
     ax = ud - V * r
     ay = vd + U * r
     dx[i_u] = ud
@@ -325,8 +340,8 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     dx[i_x] = U * cps - V * sps
     dx[i_y] = U * sps + V * cps
     dx[i_psi] = r
-    dx[i_ax] = (ax - ax_lt) / q[k_tlt]
-    dx[i_ay] = (ay - ay_lt) / q[k_tlt]
+    dx[i_ax] = (ax - ax_lt) * pt[_P_INV_TLT]
+    dx[i_ay] = (ay - ay_lt) * pt[_P_INV_TLT]
     aux[a_df] = delta_f
     aux[a_dr] = delta_r
     aux[a_ax] = ax
