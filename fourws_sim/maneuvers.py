@@ -46,14 +46,14 @@ from pathlib import Path as FilePath
 from typing import Any, Mapping
 
 import numpy as np
-import yaml
 
 from fourws_sim.drivers import (
     CirclePath, DriverCommand, LanePath, PathDriverSpec, PreviewPathDriver, SpeedHoldDriver,
     SpeedHoldSpec, path_driver_spec_from, speed_hold_spec_from, split_brake_torque,
 )
 from fourws_sim.errors import ParameterError, UnknownNameError
-from fourws_sim.params import CONFIG_DIR, GRAVITY_MPS2, Vehicle, _from_mapping, _spec
+from fourws_sim.params import (CONFIG_DIR, GRAVITY_MPS2, Vehicle, _from_mapping, _spec,
+                               available_configs, read_yaml, resolve_config_path)
 
 MANEUVER_DIR = CONFIG_DIR / "maneuvers"
 STEER_INPUTS = ("road_wheel", "steering_wheel")
@@ -69,15 +69,13 @@ def _smooth_ramp(s: float) -> float:
 
 # ---------------------------------------------------------------- per-type parameters
 
-@dataclass(frozen=True)
-class StepSteerParams:
-    """ISO 7401 step steer: 0 until ``start_s``, linear ramp over ``ramp_time_s`` to
-    ``amplitude_rad``, then held. ISO 7401 asks for a 10-90 % rise within 0.15 s; the default
-    0.1 s ramp (0.08 s from 10 to 90 %) meets it."""
+class _RampAndHold:
+    """Shape shared by step and ramp steer: 0 until ``start_s``, a ramp of ``ramp_time_s`` to
+    ``amplitude_rad``, then held (the subclasses give the three values)."""
 
-    amplitude_rad: float = _spec("any")
-    start_s: float = _spec("nonnegative", default=0.5)
-    ramp_time_s: float = _spec("nonnegative", default=0.1)
+    amplitude_rad: float
+    start_s: float
+    ramp_time_s: float
 
     def steer(self, t: float) -> float:
         """Input angle (rad) at time ``t`` (s)."""
@@ -86,14 +84,25 @@ class StepSteerParams:
         return self.amplitude_rad * _smooth_ramp((t - self.start_s) / self.ramp_time_s)
 
     def phase(self, t: float) -> str:
-        """``settle`` before the step, ``steer`` during the ramp, then ``hold``."""
+        """``settle`` before the ramp, ``steer`` during it, then ``hold``."""
         if t < self.start_s:
             return "settle"
         return "steer" if t < self.start_s + self.ramp_time_s else "hold"
 
 
 @dataclass(frozen=True)
-class RampSteerParams:
+class StepSteerParams(_RampAndHold):
+    """ISO 7401 step steer: 0 until ``start_s``, linear ramp over ``ramp_time_s`` to
+    ``amplitude_rad``, then held. ISO 7401 asks for a 10-90 % rise within 0.15 s; the default
+    0.1 s ramp (0.08 s from 10 to 90 %) meets it."""
+
+    amplitude_rad: float = _spec("any")
+    start_s: float = _spec("nonnegative", default=0.5)
+    ramp_time_s: float = _spec("nonnegative", default=0.1)
+
+
+@dataclass(frozen=True)
+class RampSteerParams(_RampAndHold):
     """Ramp steer (ch. 8, after Nalecz and Bindemann): from ``start_s`` the angle grows at
     ``rate_radps`` until it reaches ``amplitude_rad``, then is held."""
 
@@ -105,18 +114,6 @@ class RampSteerParams:
     def ramp_time_s(self) -> float:
         """Duration of the ramp in s."""
         return abs(self.amplitude_rad) / self.rate_radps
-
-    def steer(self, t: float) -> float:
-        """Input angle (rad) at time ``t`` (s)."""
-        if self.ramp_time_s == 0.0:
-            return self.amplitude_rad if t >= self.start_s - _TIME_EPS_S else 0.0
-        return self.amplitude_rad * _smooth_ramp((t - self.start_s) / self.ramp_time_s)
-
-    def phase(self, t: float) -> str:
-        """``settle``, ``steer`` (ramping), ``hold``."""
-        if t < self.start_s:
-            return "settle"
-        return "steer" if t < self.start_s + self.ramp_time_s else "hold"
 
 
 @dataclass(frozen=True)
@@ -456,7 +453,7 @@ class ManeuverSpec:
 
 def available_maneuvers() -> list[str]:
     """Names (file stems) of the shipped maneuver files."""
-    return sorted(p.stem for p in MANEUVER_DIR.glob("*.yaml"))
+    return available_configs(MANEUVER_DIR)
 
 
 def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
@@ -516,16 +513,7 @@ def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
 
 def resolve_maneuver_path(name_or_path: str | FilePath) -> FilePath:
     """A maneuver name (file stem under ``config/maneuvers``) or a path, as a path."""
-    text = str(name_or_path)
-    path = FilePath(text)
-    if path.suffix in (".yaml", ".yml") or path.exists():
-        if not path.is_file():
-            raise ParameterError("maneuver", f"no such file {text!r}")
-        return path
-    candidate = MANEUVER_DIR / f"{text}.yaml"
-    if not candidate.is_file():
-        raise UnknownNameError("maneuver", text, available_maneuvers())
-    return candidate
+    return resolve_config_path("maneuver", name_or_path, MANEUVER_DIR)
 
 
 def load_maneuver_spec(name_path_or_mapping: str | FilePath | Mapping[str, Any]
@@ -534,11 +522,7 @@ def load_maneuver_spec(name_path_or_mapping: str | FilePath | Mapping[str, Any]
     if isinstance(name_path_or_mapping, Mapping):
         return maneuver_spec_from_mapping(name_path_or_mapping, "<inline maneuver>")
     path = resolve_maneuver_path(name_path_or_mapping)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ParameterError("<file>", f"not valid YAML ({exc})", str(path)) from None
-    return maneuver_spec_from_mapping(data, str(path), default_name=path.stem)
+    return maneuver_spec_from_mapping(read_yaml(path), str(path), default_name=path.stem)
 
 
 # ---------------------------------------------------------------------------- runtime

@@ -317,30 +317,52 @@ def vehicle_from_mapping(data: Any, source: str = "<mapping>") -> Vehicle:
                    **subs)
 
 
-def available_vehicles() -> list[str]:
-    """Names (file stems) of the shipped vehicle files."""
-    return sorted(p.stem for p in VEHICLE_DIR.glob("*.yaml"))
+def available_configs(folder: Path) -> list[str]:
+    """Names (file stems) of the YAML files in a config folder."""
+    return sorted(p.stem for p in folder.glob("*.yaml"))
 
 
-def resolve_vehicle_path(name_or_path: str | Path) -> Path:
-    """Turn a vehicle name (file stem under ``config/vehicles``) or a path into a path."""
+def resolve_config_path(kind: str, name_or_path: str | Path, folder: Path) -> Path:
+    """Turn a config name (file stem under ``folder``) or a path into the path of its file.
+
+    Raises
+    ------
+    ParameterError
+        A path (``.yaml``/``.yml`` or existing) that is not a file.
+    UnknownNameError
+        A name with no file under ``folder`` (the message lists the valid names).
+    """
     text = str(name_or_path)
     path = Path(text)
     if path.suffix in (".yaml", ".yml") or path.exists():
         if not path.is_file():
-            raise ParameterError("vehicle", f"no such file {text!r}")
+            raise ParameterError(kind, f"no such file {text!r}")
         return path
-    candidate = VEHICLE_DIR / f"{text}.yaml"
+    candidate = folder / f"{text}.yaml"
     if not candidate.is_file():
-        raise UnknownNameError("vehicle", text, available_vehicles())
+        raise UnknownNameError(kind, text, available_configs(folder))
     return candidate
+
+
+def read_yaml(path: Path) -> Any:
+    """Parse a YAML file; invalid YAML is a :class:`ParameterError` naming the file."""
+    try:
+        return yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ParameterError("<file>", f"not valid YAML ({exc})", str(path)) from None
+
+
+def available_vehicles() -> list[str]:
+    """Names (file stems) of the shipped vehicle files."""
+    return available_configs(VEHICLE_DIR)
+
+
+def resolve_vehicle_path(name_or_path: str | Path) -> Path:
+    """Turn a vehicle name (file stem under ``config/vehicles``) or a path into a path."""
+    return resolve_config_path("vehicle", name_or_path, VEHICLE_DIR)
 
 
 def load_vehicle(name_or_path: str | Path) -> Vehicle:
     """Load and validate a vehicle by name (``table_8_1``) or by YAML path."""
     path = resolve_vehicle_path(name_or_path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ParameterError("<file>", f"not valid YAML ({exc})", str(path)) from None
-    return vehicle_from_mapping(data, str(path))
+    return vehicle_from_mapping(read_yaml(path), str(path))

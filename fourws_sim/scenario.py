@@ -40,11 +40,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-import yaml
 
 from fourws_sim.errors import ParameterError, UnknownNameError
 from fourws_sim.maneuvers import ManeuverSpec, load_maneuver_spec, maneuver_spec_from_mapping
-from fourws_sim.params import CONFIG_DIR, Tire, Vehicle, load_vehicle
+from fourws_sim.params import (CONFIG_DIR, Tire, Vehicle, available_configs, load_vehicle,
+                               read_yaml, resolve_config_path)
 
 SCENARIO_DIR = CONFIG_DIR / "scenarios"
 CLOCK_MODES = ("lockstep", "realtime")
@@ -297,26 +297,15 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
 
 def available_scenarios() -> list[str]:
     """Names (file stems) of the shipped scenario files."""
-    return sorted(p.stem for p in SCENARIO_DIR.glob("*.yaml"))
+    return available_configs(SCENARIO_DIR)
 
 
 def load_scenario(path_or_name: str | Path | Mapping[str, Any] = "default") -> Scenario:
     """Load and validate a scenario by name (``default``), YAML path or mapping."""
     if isinstance(path_or_name, Mapping):
         return scenario_from_mapping(path_or_name, "<inline scenario>")
-    text = str(path_or_name)
-    path = Path(text)
-    if not (path.suffix in (".yaml", ".yml") or path.exists()):
-        path = SCENARIO_DIR / f"{text}.yaml"
-        if not path.is_file():
-            raise UnknownNameError("scenario", text, available_scenarios())
-    if not path.is_file():
-        raise ParameterError("scenario", f"no such file {text!r}")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ParameterError("<file>", f"not valid YAML ({exc})", str(path)) from None
-    return scenario_from_mapping(data, str(path), default_name=path.stem)
+    path = resolve_config_path("scenario", path_or_name, SCENARIO_DIR)
+    return scenario_from_mapping(read_yaml(path), str(path), default_name=path.stem)
 
 
 __all__ = ["BeliefSpec", "CLOCK_MODES", "RecordingSpec", "SCENARIO_DIR", "Scenario",

@@ -23,7 +23,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from fourws_sim.models import check_speed
+from fourws_sim.models import check_speed, linear2dof
 from fourws_sim.params import Vehicle
 
 
@@ -34,11 +34,8 @@ class STATE(IntEnum):
     R = 1  #: yaw rate, rad/s
 
 
-class INPUT(IntEnum):
-    """Input components."""
-
-    DELTA_F = 0  #: front road-wheel angle, rad
-    DELTA_R = 1  #: rear road-wheel angle, rad
+#: Inputs: the front and rear road-wheel angles, as in the 2-DOF model.
+INPUT = linear2dof.INPUT
 
 
 @dataclass(frozen=True)

@@ -41,11 +41,8 @@ class STATE(IntEnum):
     FY_R = 3  #: rear axle lateral force, N (positive left)
 
 
-class INPUT(IntEnum):
-    """Input components."""
-
-    DELTA_F = 0  #: front road-wheel angle, rad
-    DELTA_R = 1  #: rear road-wheel angle, rad
+#: Inputs: the front and rear road-wheel angles, as in the 2-DOF model.
+INPUT = linear2dof.INPUT
 
 
 @dataclass(frozen=True)

@@ -44,11 +44,8 @@ class STATE(IntEnum):
     PHI_DOT = 3  #: roll rate, rad/s
 
 
-class INPUT(IntEnum):
-    """Input components."""
-
-    DELTA_F = 0  #: front road-wheel angle, rad
-    DELTA_R = 1  #: rear road-wheel angle, rad
+#: Inputs: the front and rear road-wheel angles, as in the 2-DOF model.
+INPUT = linear2dof.INPUT
 
 
 @dataclass(frozen=True)
@@ -101,7 +98,7 @@ def params_for(vehicle: Vehicle, speed_mps: float) -> Params:
     ix, ixz = rl.roll_inertia_kgm2, rl.roll_yaw_product_kgm2
     k_phi, c_phi = rl.roll_stiffness_nm_per_rad, rl.roll_damping_nms_per_rad
     ef, er = rl.roll_steer_front, rl.roll_steer_rear
-    S, I = STATE, INPUT
+    S = STATE
     # Second-order form  M x' = F x + G u  (rows: lateral, yaw, roll kinematics, roll).
     M = np.zeros((4, 4))
     M[0, [S.V, S.PHI_DOT]] = [m, -msh]
