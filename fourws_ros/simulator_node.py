@@ -55,6 +55,8 @@ MIN_STEP_S, MAX_STEP_S = 1e-5, 0.1
 #: Lockstep: wall time to wait for the controller after it has missed a tick, s (a healthy
 #: controller answers within ~1 ms).
 LOST_WAIT_S = 0.02
+#: Realtime: how many overruns are itemized in the shutdown log line.
+MAX_OVERRUN_LOG = 20
 #: Step-lateness histogram (realtime): bin width, s, and bin count (the last bin collects
 #: everything later than 20 ms).
 LATENESS_BIN_S = 1e-5
@@ -236,6 +238,7 @@ class SimulatorNode(Node):
         self.lateness_hist = np.zeros(LATENESS_BINS, dtype=np.int64)
         self.overruns = 0
         self.max_lateness_at_s = 0.0
+        self.overrun_log: list[tuple[float, float]] = []
         self.steps_done = 0
         self._next_viz_s = 0.0
         self._next_status_s = 0.0
@@ -503,6 +506,8 @@ class SimulatorNode(Node):
                 self.max_lateness_at_s = self.sim.time_s
             if late > dt:
                 self.overruns += 1
+                if len(self.overrun_log) < MAX_OVERRUN_LOG:
+                    self.overrun_log.append((self.sim.time_s, late))
                 t0 += late  # re-base: simulated time does not race to catch up
             with self._lock:
                 if k % self.n_control == 0:
@@ -546,7 +551,10 @@ class SimulatorNode(Node):
                 f"realtime: {self.steps_done} steps, step lateness p99 "
                 f"{self.lateness_percentile(99.0) * 1e3:.3f} ms, max "
                 f"{self.max_lateness_s * 1e3:.3f} ms at t = {self.max_lateness_at_s:.3f} s, "
-                f"{self.overruns} overruns")
+                f"{self.overruns} overruns"
+                + (" (t/late ms: " + ", ".join(f"{t:.3f}/{late * 1e3:.2f}"
+                                               for t, late in self.overrun_log) + ")"
+                   if self.overrun_log else ""))
         if self.clock_mode == "lockstep" and self.ticks_published > 1:
             n = self.ticks_published - 1
             self.get_logger().info(
