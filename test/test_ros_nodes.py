@@ -437,3 +437,65 @@ def test_maneuver_node_refuses_bad_maneuver(rclpy_context, tmp_path):
         _make_node(ManeuverNode, rclpy_context, maneuver=str(bad))
     with pytest.raises(ParameterError, match="maneuver_json"):
         _make_node(ManeuverNode, rclpy_context, maneuver_json="{type: oops")
+
+
+def test_realtime_command_timeout_falls_back_to_zero_and_recovers(rclpy_context):
+    from rclpy.executors import SingleThreadedExecutor
+
+    from fourws_ros.simulator_node import SimulatorNode
+
+    timeout = 0.05  # s of simulation time = 5 control periods
+    sim = _make_node(SimulatorNode, rclpy_context, clock_mode="realtime",
+                     command_timeout_s=timeout, realtime_priority=0, status_period_s=0.02)
+    peer = _Peer(rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(sim)
+    executor.add_node(peer.node)
+    try:
+        # no controller: after the timeout the simulator reports zero rear steer
+        assert _spin_until(executor, lambda: any(s.command_timed_out for s in peer.status),
+                           5.0)
+        flagged = next(s for s in peer.status if s.command_timed_out)
+        assert flagged.sim_time_s > timeout - 0.01 and flagged.stale_commands >= 1
+        # a controller appears: its commands are used again, the flag clears
+        def answering() -> bool:
+            if peer.states:
+                peer.answer(peer.states[-1], 0.01)
+            return bool(peer.status) and not peer.status[-1].command_timed_out
+        assert _spin_until(executor, answering, 5.0)
+        assert _spin_until(executor, lambda: peer.states[-1].rear_wheel_angle_rad > 0.005, 5.0)
+    finally:
+        sim.on_shutdown(executor)
+        executor.shutdown()
+        sim.destroy_node()
+        peer.node.destroy_node()
+
+
+def test_message_conversions_round_trip():
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    from fourws_ros import cdr
+    from fourws_sim.drivers import DriverCommand
+
+    rng = np.random.default_rng(3)
+    outputs = {k: float(rng.normal()) for k in conversions.STATE_SCALARS}
+    outputs.update({k: rng.normal(size=4) for k in conversions.STATE_WHEELS})
+    msg = conversions.state_msg(outputs, time_s=0.123456789, step=123, model="3dof")
+    back = conversions.state_to_outputs(deserialize_message(
+        serialize_message(msg), topics.message_class(topics.STATE)))
+    fast = cdr.parse_state(serialize_message(msg))
+    for key in conversions.STATE_SCALARS:
+        assert back[key] == outputs[key] == fast[key]
+    assert back["sim_time_s"] == 0.123456789
+    cmd = DriverCommand(0.1, 0.00625, 0.0, (10.0, 10.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0))
+    assert conversions.driver_command(conversions.driver_msg(cmd, 1.0)) == cmd
+    with pytest.raises(conversions.NonFiniteError, match="front_wheel_angle_rad"):
+        conversions.driver_msg(DriverCommand(0.0, math.inf), 1.0)
+    with pytest.raises(conversions.NonFiniteError, match="yaw_rate_radps"):
+        conversions.state_msg({**outputs, "yaw_rate_radps": math.nan}, time_s=1.0, step=1,
+                              model="8dof")
+    # odometry orientation: heading psi about z gives q = (0, 0, sin(psi/2), cos(psi/2))
+    msg.heading_rad, msg.roll_rad = 0.5, 0.0
+    q = conversions.odometry_msg(msg).pose.pose.orientation
+    assert (q.x, q.y) == (0.0, 0.0)
+    assert q.z == pytest.approx(math.sin(0.25)) and q.w == pytest.approx(math.cos(0.25))
