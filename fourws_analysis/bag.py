@@ -31,9 +31,11 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 
 from fourws_sim.errors import FourwsError
+from fourws_sim.params import find_resource_dir
 
 #: Folder with the fourws ``.msg`` definitions.
-MSG_DIR = Path(__file__).resolve().parent.parent / "msg"
+MSG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "msg", "fourws_msgs", "msg",
+                            "*.msg")
 #: ROS package name the ``.msg`` files are built into.
 MSG_PACKAGE = "fourws_msgs"
 

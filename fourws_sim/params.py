@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -32,8 +34,24 @@ import yaml
 
 from fourws_sim.errors import ParameterError, UnknownNameError
 
-#: Folder holding the shipped configuration (vehicles, maneuvers, scenarios).
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "config"
+def find_resource_dir(beside: Path, package: str, sub: str, marker: str) -> Path:
+    """A folder shipped with fourws: ``beside`` in a checkout or an editable install, else
+    ``share/<package>/<sub>`` of an installed package (``colcon build`` without
+    ``--symlink-install``), searched along ``AMENT_PREFIX_PATH`` and this interpreter's prefix.
+    ``marker`` is a name (glob) the folder must contain."""
+    if any(beside.glob(marker)):
+        return beside
+    prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    for prefix in (*prefixes, sys.prefix):
+        candidate = Path(prefix) / "share" / package / sub
+        if any(candidate.glob(marker)):
+            return candidate
+    return beside
+
+
+#: Folder holding the shipped configuration (vehicles, maneuvers, scenarios, node parameters).
+CONFIG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "config", "fourws",
+                               "config", "vehicles")
 VEHICLE_DIR = CONFIG_DIR / "vehicles"
 
 GRAVITY_MPS2 = 9.80665
