@@ -351,11 +351,14 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
 
 def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     """dx/dt into ``dx`` and per-wheel quantities into ``aux`` (see ``eightdof.Kernels``)."""
-    _rhs_inline(x, u, q, _parameter_terms_inline(q), cf, cr, dx, aux)
+    _rhs_called(x, u, q, _parameter_terms_inline(q), cf, cr, dx, aux)
 
 
 _parameter_terms_inline = _jit_inline(_parameter_terms)
+# RK4 (the real-time path) gets the right-hand side inlined, ~7 % faster; ``rhs`` and Euler
+# call one compiled copy (numba's inlining is what makes the first compile slow)
 _rhs_inline = _jit_inline(_rhs_terms)
+_rhs_called = _jit(_rhs_terms)
 rhs = _jit(_rhs)
 
 #: Rows of the integrators' work array: the four RK4 stage derivatives, the stage state.
@@ -434,7 +437,7 @@ def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     xt = work[1]
     pt = _parameter_terms_inline(q)
     for step in range(n):
-        _rhs_inline(x, u, q, pt, cf, cr, k1, aux)
+        _rhs_called(x, u, q, pt, cf, cr, k1, aux)
         ok = True
         for j in range(N_STATE):
             xt[j] = x[j] + dt * k1[j]
