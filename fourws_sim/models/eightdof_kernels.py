@@ -7,7 +7,7 @@ under its own module name with ``TIRE_NAME`` set, so every tire gets its own com
 disk-cached) variant with the tire function inlined.
 
 Speed (the simulator runs RK4 at 1 ms many times faster than real time): the right-hand side
-is inlined into the integrator loops at one call site, and it evaluates the four tires back to
+is inlined into the RK4 loop at one call site, and it evaluates the four tires back to
 back (wheel kinematics of all four wheels first, then the four tires, then the wheel and body
 equations), so that the CPU overlaps the four independent latency chains of the tire. A tire
 module may provide ``forces4(fz, alpha, kappa, vx, mu, coeffs_front, coeffs_rear, fx, fy, mz)``
@@ -122,8 +122,10 @@ HELD_FLOOR = float(HELD_SPIN_FLOOR_RADPS)
 a_df, a_dr, a_ax, a_ay = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY
 
 
-def _forces4_by_wheel(fz, alpha, kappa, vx, mu, cf, cr, fx, fy, mz):  # type: ignore[no-untyped-def]
-    """``forces4`` by four ``forces`` calls (tires without their own ``forces4``)."""
+def _forces4_by_wheel(fz, alpha, kappa, vx, mu, cf, cr,  # type: ignore[no-untyped-def]
+                      fx, fy, mz):
+    """``forces4`` by four ``forces`` calls (tires without their own ``forces4``; ``rhs``
+    then calls ``forces`` directly, this only keeps ``_forces4`` defined for typing)."""
     for i in range(4):
         cc = cf if i < 2 else cr
         fx[i], fy[i], mz[i] = _tire_inline(fz[i], alpha[i], kappa[i], vx[i], mu, cc)
