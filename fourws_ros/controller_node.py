@@ -104,7 +104,7 @@ class ControllerNode(Node):
                                  self._on_state, topics.STREAM_QOS, raw=True)
         self.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
                                  self._on_driver, topics.STREAM_QOS, raw=True)
-        self._cmd_msg = topics.message_class(topics.REAR_STEER_CMD)()
+        self._cmd_encoder = cdr.RearSteerCommandEncoder(topics.FRAME_BODY)
         self._state: Any = None
         self._state_rx = 0.0
         self._driver: dict[int, float] = {}  # stamp ns -> front road-wheel angle, rad
@@ -217,8 +217,8 @@ class ControllerNode(Node):
         try:
             law_cmd = self.law.rear_angle(conversions.law_input_from_outputs(state, front))
             angle = self.actuator.apply(law_cmd, self.dt_s)
-            self.pub.publish(conversions.rear_cmd_msg(angle, 0.0, self.law_name, key,
-                                                      state["step"], self._cmd_msg))
+            self.pub.publish(self._cmd_encoder.encode(angle, 0.0, self.law_name, key,
+                                                      state["step"]))
         except FourwsError as exc:
             # never publish a non-finite command: the simulator times out to zero rear steer
             self.get_logger().error(f"no command for step {state['step']}: {exc}",

@@ -65,7 +65,7 @@ class ManeuverNode(Node):
         # raw: the fast decoder keeps the lockstep answer chain short (fourws_ros.cdr)
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                  self._on_state, topics.STREAM_QOS, raw=True)
-        self._driver_msg = topics.message_class(topics.DRIVER_INPUT)()
+        self._driver_encoder = cdr.DriverInputEncoder(topics.FRAME_BODY)
         self._phase = ""
         self._done = False
         self.get_logger().info(f"maneuver {self.maneuver.name} "
@@ -101,7 +101,7 @@ class ManeuverNode(Node):
             return
         try:
             cmd = self.maneuver.command(t, outputs)
-            self.driver_pub.publish(conversions.driver_msg(cmd, t, self._driver_msg))
+            self.driver_pub.publish(self._driver_encoder.encode(cmd, t))
         except FourwsError as exc:
             self._done = True
             self._status(stamp, "done", self.maneuver.progress(t), True, f"abort: {exc}")

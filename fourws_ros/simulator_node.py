@@ -199,11 +199,12 @@ class SimulatorNode(Node):
         self.create_subscription(msg(topics.RECORDER_PROGRESS), topics.RECORDER_PROGRESS,
                                  self._on_recorder_progress, topics.STATUS_QOS)
         self.recorder_window = int(self._param("recorder_window_ticks"))
-        # one message object each, refilled per publication (publish serializes at once)
-        self._state_msg = msg(topics.STATE)()
-        self._clock_msg = msg(topics.CLOCK)()
-        self._odom_msg = msg(topics.ODOM)()
-        self._imu_msg = msg(topics.IMU)()
+        # state, odometry, IMU and clock go out as CDR bytes written straight from the outputs
+        # (fourws_ros.cdr), not through Python messages: a shorter lockstep tick, and less
+        # time holding the GIL in the realtime thread
+        self._state_encoder = cdr.StateEncoder(self.model_name, topics.FRAME_BODY)
+        self._odom_encoder = cdr.OdometryEncoder(topics.FRAME_ODOM, topics.FRAME_BODY)
+        self._imu_encoder = cdr.ImuEncoder(topics.FRAME_BODY)
         self.create_service(Trigger, topics.SRV_RESET, self._on_reset)
         self.create_service(SetBool, topics.SRV_PAUSE, self._on_pause)
 
@@ -242,7 +243,7 @@ class SimulatorNode(Node):
         self.steps_done = 0
         self._next_viz_s = 0.0
         self._next_status_s = 0.0
-        self._awaiting: Any = None  # lockstep: the state message waiting for its answers
+        self._awaiting: _Tick | None = None  # lockstep: the state waiting for its answers
         self._blocked_state: Any = None  # lockstep: a tick held back by flow control
         self.ticks_published = 0
         self.recorder_states = 0
@@ -294,7 +295,7 @@ class SimulatorNode(Node):
         blocked = self._blocked_state
         if blocked is not None and self.ticks_published - self.recorder_states <= \
                 self.recorder_window:
-            self._send_tick(*blocked)
+            self._send_tick(blocked)
 
     # ------------------------------------------------------------------ services
     def _on_reset(self, _request: Any, response: Any) -> Any:
@@ -370,38 +371,39 @@ class SimulatorNode(Node):
     def _publish_tick(self) -> None:
         outputs = self.sim.outputs()
         t = float(outputs.get("sim_time_s", self.sim.time_s))
+        step = self.step_count
         try:
-            state = conversions.state_msg(outputs, time_s=t, step=self.step_count,
-                                          model=self.model_name, msg=self._state_msg)
+            raw = self._state_encoder.encode(outputs, t, step)
         except NonFiniteError as exc:
             self._stop(f"non-finite state: {exc}")
             return
+        tick = _Tick(raw, outputs, t, step, conversions.time_to_ns(t))
         window = self.recorder_window
         if window and self.ticks_published - self.recorder_states > window:
-            self._blocked_state = (state, t)  # the recorder's progress releases it
+            self._blocked_state = tick  # the recorder's progress releases it
             return
-        self._send_tick(state, t)
+        self._send_tick(tick)
 
-    def _send_tick(self, state: Any, t: float) -> None:
+    def _send_tick(self, tick: "_Tick") -> None:
         self._blocked_state = None
         self.ticks_published += 1
-        self._awaiting = state
+        self._awaiting = tick
         self._await_since = time.monotonic()
         self._sent_at = time.perf_counter()
-        self.state_pub.publish(state)  # first: the answers' critical path starts here
-        self.clock_pub.publish(conversions.clock_msg(t, self._clock_msg))
-        self._publish_side(state, t)
+        self.state_pub.publish(tick.raw)  # first: the answers' critical path starts here
+        self.clock_pub.publish(cdr.encode_clock(tick.t))
+        self._publish_side(tick.t, tick.outputs, tick.stamp_ns)
 
     def _lockstep_try_advance(self, timed_out: bool = False) -> None:
-        state = self._awaiting
-        if state is None or self.paused or self.finished:
+        tick = self._awaiting
+        if tick is None or self.paused or self.finished:
             return
-        have_driver = self.driver_stamp_ns == conversions.stamp_to_ns(state.header.stamp)
-        have_cmd = self.rear_cmd_step == int(state.step)
+        have_driver = self.driver_stamp_ns == tick.stamp_ns
+        have_cmd = self.rear_cmd_step == tick.step
         if not have_driver:
             # the maneuver is done (the launcher ends the run) or has stopped answering
             if timed_out:
-                self.get_logger().warning(f"no driver input for step {state.step}",
+                self.get_logger().warning(f"no driver input for step {tick.step}",
                                           throttle_duration_sec=5.0)
             return
         if not have_cmd and not timed_out:
@@ -411,7 +413,7 @@ class SimulatorNode(Node):
         if not have_cmd:
             self.stale_commands += 1
             self.get_logger().warning(
-                f"no rear-steer command for step {state.step} (t = {state.sim_time_s:.2f} s) "
+                f"no rear-steer command for step {tick.step} (t = {tick.t:.2f} s) "
                 f"within {self._cfg['command_timeout_s']} s: zero rear steer "
                 f"({self.stale_commands} ticks so far)", throttle_duration_sec=1.0)
         self._awaiting = None
@@ -436,10 +438,12 @@ class SimulatorNode(Node):
         self.steps_done += n_steps
         return True
 
-    def _publish_side(self, state: Any, t: float) -> None:
+    def _publish_side(self, t: float, outputs: Any, stamp_ns: int) -> None:
+        """Odometry and IMU (every ``viz_period_s``) and status (every ``status_period_s``) of
+        the state published at ``t`` (s) from its ``outputs``, stamped ``stamp_ns``."""
         if t >= self._next_viz_s - 1e-12:
-            self.odom_pub.publish(conversions.odometry_msg(state, self._odom_msg))
-            self.imu_pub.publish(conversions.imu_msg(state, self._imu_msg))
+            self.odom_pub.publish(self._odom_encoder.encode(outputs, stamp_ns))
+            self.imu_pub.publish(self._imu_encoder.encode(outputs, stamp_ns))
             self._next_viz_s = t + self._cfg["viz_period_s"]
         if t >= self._next_status_s - 1e-12:
             self._publish_status(t, running=True)
@@ -527,15 +531,13 @@ class SimulatorNode(Node):
                     outputs = self.sim.outputs()
                     t = float(outputs.get("sim_time_s", self.sim.time_s))
                     try:
-                        state = conversions.state_msg(outputs, time_s=t, step=self.step_count,
-                                                      model=self.model_name,
-                                                      msg=self._state_msg)
+                        raw = self._state_encoder.encode(outputs, t, self.step_count)
                     except NonFiniteError as exc:
                         self._stop(f"non-finite state: {exc}")
                         return
-                    self.state_pub.publish(state)
-                    self.clock_pub.publish(conversions.clock_msg(t, self._clock_msg))
-                    self._publish_side(state, t)
+                    self.state_pub.publish(raw)
+                    self.clock_pub.publish(cdr.encode_clock(t))
+                    self._publish_side(t, outputs, conversions.time_to_ns(t))
 
     def _stop_rt_thread(self) -> None:
         thread = self._rt_thread
@@ -564,6 +566,18 @@ class SimulatorNode(Node):
         self._stop_rt_thread()
         if not self.stop_reason:
             self._publish_status(self.sim.time_s, running=False)
+
+
+@dataclasses.dataclass
+class _Tick:
+    """One lockstep state: its CDR bytes, the outputs it was made from, the exact simulation
+    time (s), the integration step and the header stamp (ns) the answers carry."""
+
+    raw: bytes
+    outputs: Any
+    t: float
+    step: int
+    stamp_ns: int
 
 
 def _make_thread_realtime(priority: int, logger: Any) -> None:

@@ -325,6 +325,62 @@ def test_fast_cdr_decoders_equal_rclpy():
         cdr.parse_state(b"\x00\x01\x00\x00\x01")
 
 
+def test_fast_cdr_encoders_equal_rclpy():
+    """The encoders' bytes deserialize (with rclpy) to exactly the message the conversions
+    build, and are as long as rclpy's own serialization (padding bytes aside, which rclpy
+    leaves uninitialized)."""
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    from fourws_ros import cdr
+    from fourws_sim.drivers import DriverCommand
+    from fourws_sim.errors import NonFiniteError
+
+    def same(raw: bytes, msg) -> bool:
+        return (len(raw) == len(serialize_message(msg))
+                and deserialize_message(raw, type(msg)) == msg)
+
+    rng = np.random.default_rng(11)
+    odom = cdr.OdometryEncoder(topics.FRAME_ODOM, topics.FRAME_BODY)
+    imu = cdr.ImuEncoder(topics.FRAME_BODY)
+    for model in ("8dof", "2dof", "3dof-lagged"):  # string lengths shift every later offset
+        encoder = cdr.StateEncoder(model, topics.FRAME_BODY)
+        for _ in range(20):
+            outputs = {k: float(rng.normal() * 100.0) for k in conversions.STATE_SCALARS}
+            if model == "8dof":  # single-track models have no wheel fields: they stay zero
+                outputs.update({k: rng.normal(size=4) * 1e3 for k in conversions.STATE_WHEELS})
+            t, step = float(rng.uniform(0.0, 1e3)), int(rng.integers(0, 2**50))
+            msg = conversions.state_msg(outputs, time_s=t, step=step, model=model)
+            assert same(encoder.encode(outputs, t, step), msg)
+            stamp = conversions.stamp_to_ns(msg.header.stamp)
+            assert same(odom.encode(outputs, stamp), conversions.odometry_msg(msg))
+            assert same(imu.encode(outputs, stamp), conversions.imu_msg(msg))
+            assert same(cdr.encode_clock(t), conversions.clock_msg(t))
+    driver = cdr.DriverInputEncoder(topics.FRAME_BODY)
+    rear = cdr.RearSteerCommandEncoder(topics.FRAME_BODY)
+    for _ in range(50):
+        v = [float(x) for x in rng.normal(size=11)]
+        cmd = DriverCommand(v[0], v[1], v[2], tuple(v[3:7]), tuple(v[7:11]))
+        t = float(rng.uniform(0.0, 1e3))
+        assert same(driver.encode(cmd, t), conversions.driver_msg(cmd, t))
+        for law in ("sol1", "fws", "rwc2_3dof", "x"):  # each alignment of the later fields
+            stamp, step = int(rng.integers(0, 2**40)), int(rng.integers(0, 2**50))
+            assert same(rear.encode(v[0], v[1], law, stamp, step),
+                        conversions.rear_cmd_msg(v[0], v[1], law, stamp, step))
+    # a changed value is seen by the comparison (the check above can fail)
+    changed = conversions.state_msg(outputs, time_s=t, step=step, model="8dof")
+    changed.fy_n[3] += 1.0
+    assert not same(cdr.StateEncoder("8dof", topics.FRAME_BODY).encode(outputs, t, step),
+                    changed)
+    # nothing non-finite leaves a node, as with the message conversions
+    with pytest.raises(NonFiniteError, match="yaw_rate_radps"):
+        cdr.StateEncoder("8dof", topics.FRAME_BODY).encode(
+            {**outputs, "yaw_rate_radps": math.nan}, 1.0, 1)
+    with pytest.raises(NonFiniteError, match="front_wheel_angle_rad"):
+        driver.encode(DriverCommand(0.0, math.inf), 1.0)
+    with pytest.raises(NonFiniteError):
+        rear.encode(math.nan, 0.0, "sol1", 0, 0)
+
+
 # ----------------------------------------------------------------------------- replay
 def test_replay_timed_plays_every_message_at_rate(tmp_path, rclpy_context):
     from rclpy.executors import SingleThreadedExecutor
