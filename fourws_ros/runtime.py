@@ -25,7 +25,8 @@ EXIT_CRASH = 1
 EXIT_USER_ERROR = 2
 EXIT_RUN_STOPPED = 3
 
-#: Longest blocking wait of the spin loop, s (how quickly a signal is noticed).
+#: How long the executor runs callbacks before the spin loop checks for a signal or a finished
+#: node again, s (how quickly a signal is noticed).
 SPIN_TIMEOUT_S = 0.05
 
 
@@ -78,6 +79,7 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     """
     import rclpy
     from rclpy.signals import SignalHandlerOptions
+    from rclpy.task import Future
 
     from rclpy.exceptions import ParameterException
 
@@ -99,8 +101,16 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
             return EXIT_USER_ERROR
         executor = make_executor()
         executor.add_node(node)
-        while flag.signal is None and not getattr(node, "finished", False) and rclpy.ok():
-            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+        # Callbacks run inside the executor for SPIN_TIMEOUT_S at a time (spinning until a
+        # future that never completes, with that timeout), not one per spin_once: with the
+        # events executor the loop between two callbacks then stays in C++, which saves
+        # Python work on every message (about 10 % of the lockstep rate, where every process
+        # takes several messages per tick). A signal's Python handler runs at the next callback
+        # or timeout.
+        never = Future()
+        context_ok = node.context.ok
+        while flag.signal is None and not getattr(node, "finished", False) and context_ok():
+            executor.spin_until_future_complete(never, timeout_sec=SPIN_TIMEOUT_S)
         hook = getattr(node, "on_shutdown", None)
         if hook is not None:
             hook(executor)
