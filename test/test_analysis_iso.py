@@ -12,15 +12,7 @@ from scipy import optimize, signal
 from fourws_analysis import identify, iso4138, iso7401, linearize
 from fourws_analysis.bag import MetricUnavailableError
 from fourws_sim.params import vehicle_from_mapping
-
-#: Table 4.1 set 1 (Yeh and Wu) of Samsundar (1996).
-SET_1 = {
-    "name": "table_4_1_set_1_test",
-    "chassis": {"mass_kg": 3943.0, "yaw_inertia_kgm2": 6238.0, "cg_to_front_axle_m": 1.52,
-                "cg_to_rear_axle_m": 1.70},
-    "axle_tires": {"cornering_stiffness_front_n_per_rad": 84957.0,
-                   "cornering_stiffness_rear_n_per_rad": 84957.0},
-}
+from test_analysis_frequency import SET_1  # Table 4.1 set 1 (Yeh and Wu)
 
 
 def second_order_step(t: np.ndarray, zeta: float, wn: float, gain: float) -> np.ndarray:
