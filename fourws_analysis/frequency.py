@@ -105,9 +105,11 @@ class FrequencyResponse:
         return np.degrees(ph)
 
     def trusted(self, coherence_min: float = COHERENCE_MIN) -> np.ndarray:
-        """Boolean mask of points to trust: f > 0, coherence above ``coherence_min`` and the
-        input excited (power at least :data:`EXCITATION_MIN` of its peak)."""
-        mask = self.freq_hz > 0.0
+        """Boolean mask of points to trust: a finite response, coherence above
+        ``coherence_min`` and the input excited (power at least :data:`EXCITATION_MIN` of its
+        peak). 0 Hz appears only in transient estimates, where it is a real point (see
+        :func:`estimate_response`)."""
+        mask = np.isfinite(self.response)
         if self.coherence is not None:
             mask &= self.coherence > coherence_min
         if self.input_power is not None:
@@ -122,7 +124,8 @@ class ResponseMetrics:
     Attributes
     ----------
     steady_state_gain : float
-        Gain at the lowest trusted frequency (output unit per input unit).
+        Gain at the lowest trusted frequency (output unit per input unit): 0 Hz for a
+        transient record (pulse, sweep) whose input integral is excited, else the first bin.
     resonance_ratio : float or None
         Peak gain / steady-state gain (None: no peak inside the trusted band).
     resonance_freq_hz : float or None
@@ -178,6 +181,12 @@ def estimate_response(u: np.ndarray, y: np.ndarray, dt_s: float, *, method: str 
       ``Y(f) = H(f) U(f)`` holds bin by bin; Welch segments would cut the sweep into pieces
       whose windowed responses no longer satisfy it (measured: 0.8 dB error at the a_y notch
       of the Table 4.1 set 1 vehicle with 10 s Welch segments, 0.3 dB with this estimator).
+      The signals are taken as deviations from their first sample (the rest or trim state
+      the record starts in), not from their mean, and the 0 Hz bin is kept on its own: for
+      a record that also ends in that state it holds the time integrals, and their ratio
+      ``H(0) = sum(y) / sum(u)`` is the steady-state gain. A pulse puts most of its
+      energy there, while its lowest nonzero bin, 1/T (0.2 Hz for a 5 s record), can be far
+      from steady state (Table 4.1 set 1, 85 km/h: yaw-rate gain 7.6 % above DC).
 
     Parameters
     ----------
@@ -207,6 +216,9 @@ def estimate_response(u: np.ndarray, y: np.ndarray, dt_s: float, *, method: str 
             f"{what}: input {input_name or 'u'} is constant (no excitation band)")
     if not (np.all(np.isfinite(u)) and np.all(np.isfinite(y))):
         raise MetricUnavailableError(f"{what}: non-finite samples in the record")
+    if method == "transient":
+        # before decimating, so the decimation filter sees no step at the record start
+        u, y = u - u[0], y - y[0]
     # decimate first when sampled far above the band: same estimate, much less work
     step = max(1, int(fs / (8.0 * max_freq_hz)))
     if step > 1 and u.size // step >= 64:
@@ -219,25 +231,27 @@ def estimate_response(u: np.ndarray, y: np.ndarray, dt_s: float, *, method: str 
         f, p_uy = signal.csd(u, y, **kw)
         _, p_uu = signal.welch(u, **kw)
         _, p_yy = signal.welch(y, **kw)
+        # 0 Hz of mean-removed Hann segments carries no information
+        f, p_uy, p_uu, p_yy = f[1:], p_uy[1:], p_uu[1:], p_yy[1:]
     elif method == "transient":
-        kw = {"fs": fs, "nperseg": u.size, "window": "boxcar", "detrend": "constant"}
+        kw = {"fs": fs, "nperseg": u.size, "window": "boxcar", "detrend": False}
         f, p_uy = signal.csd(u, y, **kw)
         _, p_uu = signal.welch(u, **kw)
         _, p_yy = signal.welch(y, **kw)
         width = max(1, int(round(resolution_hz / (f[1] - f[0]))))
         n_band = (f.size - 1) // width
-        sl = slice(1, 1 + n_band * width)  # skip DC
-        f = f[sl].reshape(n_band, width).mean(axis=1)
-        p_uy, p_uu, p_yy = (p[sl].reshape(n_band, width).mean(axis=1)
-                            for p in (p_uy, p_uu, p_yy))
+        sl = slice(1, 1 + n_band * width)  # 0 Hz stays a band of its own
+        f, p_uy, p_uu, p_yy = (
+            np.concatenate(([p[0]], p[sl].reshape(n_band, width).mean(axis=1)))
+            for p in (f, p_uy, p_uu, p_yy))
     else:
         raise ValueError(f"method must be 'welch' or 'transient', got {method!r}")
-    keep = (f > 0.0) & (f <= max_freq_hz)
+    keep = f <= max_freq_hz
     with np.errstate(divide="ignore", invalid="ignore"):
         h = np.where(p_uu[keep] > 0, p_uy[keep] / p_uu[keep], np.nan)
         coh = np.where((p_uu[keep] > 0) & (p_yy[keep] > 0),
                        np.abs(p_uy[keep]) ** 2 / (p_uu[keep] * p_yy[keep]), 0.0)
-    peak = float(np.max(p_uu[f > 0.0]))
+    peak = float(np.max(p_uu))
     return FrequencyResponse(output=output, input=input_name, freq_hz=f[keep], response=h,
                              coherence=np.nan_to_num(coh), label="measured",
                              input_power=p_uu[keep] / peak)

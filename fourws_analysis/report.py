@@ -99,14 +99,18 @@ def plot_bode(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
             if fr is None:
                 continue
             ok = fr.trusted()
+            off_axis = fr.freq_hz <= 0.0  # the 0 Hz point of a transient estimate
             color = f"C{k}"
-            ax_g.semilogx(fr.freq_hz, _masked(fr.gain_db, ~ok), color=color, lw=1.8,
+            ax_g.semilogx(fr.freq_hz, _masked(fr.gain_db, ~ok | off_axis), color=color, lw=1.8,
                           label=f"{r.name} measured")
-            ax_g.semilogx(fr.freq_hz, _masked(fr.gain_db, ok), color=color, lw=0.8, alpha=0.3)
-            ax_p.semilogx(fr.freq_hz, _masked(fr.phase_deg, ~ok), color=color, lw=1.8)
-            ax_p.semilogx(fr.freq_hz, _masked(fr.phase_deg, ok), color=color, lw=0.8, alpha=0.3)
+            ax_g.semilogx(fr.freq_hz, _masked(fr.gain_db, ok | off_axis), color=color, lw=0.8,
+                          alpha=0.3)
+            ax_p.semilogx(fr.freq_hz, _masked(fr.phase_deg, ~ok | off_axis), color=color,
+                          lw=1.8)
+            ax_p.semilogx(fr.freq_hz, _masked(fr.phase_deg, ok | off_axis), color=color,
+                          lw=0.8, alpha=0.3)
             if fr.coherence is not None:
-                ax_c.semilogx(fr.freq_hz, fr.coherence, color=color, lw=1.2)
+                ax_c.semilogx(fr.freq_hz, _masked(fr.coherence, off_axis), color=color, lw=1.2)
             for name, system in r.models.items():
                 if chan not in system.C:
                     continue
