@@ -7,8 +7,8 @@ instead of stopping the others:
 ==========================================  =============================================
 maneuver                                    metrics
 ==========================================  =============================================
-``swept_sine``, ``pulse``                   frequency response (full-record H1), modes
-``random_steer``, ``sine``                  frequency response (Welch H1)
+``swept_sine``, ``pulse``, ``sine``         frequency response (full-record H1), modes
+``random_steer``                            frequency response (Welch H1)
 ``step_steer``, ``ramp_steer``              ISO 7401 step metrics, identified eigenvalues
 ``slow_ramp_steer``, ``constant_radius``    ISO 4138 gradients, understeer, char. speed
 every run with a vehicle                    eigenvalues of the linearized 8-DOF vs speed

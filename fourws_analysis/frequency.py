@@ -97,12 +97,7 @@ class FrequencyResponse:
     @property
     def phase_deg(self) -> np.ndarray:
         """Phase in degrees, unwrapped from the lowest frequency, in (-360, 180]."""
-        ph = np.unwrap(np.angle(self.response))
-        if ph.size and ph[0] > math.pi:
-            ph -= 2 * math.pi
-        elif ph.size and ph[0] <= -math.pi:
-            ph += 2 * math.pi
-        return np.degrees(ph)
+        return _unwrapped_phase_deg(self.response)
 
     def trusted(self, coherence_min: float = COHERENCE_MIN) -> np.ndarray:
         """Boolean mask of points to trust: a finite response, coherence above
@@ -125,7 +120,8 @@ class ResponseMetrics:
     ----------
     steady_state_gain : float
         Gain at the lowest trusted frequency (output unit per input unit): 0 Hz for a
-        transient record (pulse, sweep) whose input integral is excited, else the first bin.
+        transient record (pulse, sweep) whose input integral is excited, else the first bin
+        (a note then says which frequency).
     resonance_ratio : float or None
         Peak gain / steady-state gain (None: no peak inside the trusted band).
     resonance_freq_hz : float or None
@@ -158,9 +154,10 @@ class ResponseMetrics:
                 "trusted_band_hz": list(self.band_hz), "notes": list(self.notes)}
 
 
-#: Maneuvers whose whole record is one transient (a sweep or a pulse starting from rest):
-#: estimated from the full record, since Welch segments would cut the response apart.
-TRANSIENT_MANEUVERS = ("swept_sine", "pulse")
+#: Maneuvers whose whole record is one transient (a sweep, a pulse or the ISO 7401 single-period
+#: sine, each starting from rest): estimated from the full record, since Welch segments would
+#: cut the response apart.
+TRANSIENT_MANEUVERS = ("swept_sine", "pulse", "sine")
 #: Maneuvers that excite a frequency band at all.
 FREQUENCY_MANEUVERS = ("swept_sine", "pulse", "random_steer", "sine")
 
@@ -269,6 +266,17 @@ def _decimate_chain(x: np.ndarray, step: int) -> np.ndarray:
     return out
 
 
+def _unwrapped_phase_deg(response: np.ndarray) -> np.ndarray:
+    """Phase of ``response`` in degrees, unwrapped from its first point, which is put in
+    (-180, 180]."""
+    ph = np.unwrap(np.angle(response))
+    if ph.size and ph[0] > math.pi:
+        ph -= 2 * math.pi
+    elif ph.size and ph[0] <= -math.pi:
+        ph += 2 * math.pi
+    return np.degrees(ph)
+
+
 def response_metrics(fr: FrequencyResponse, coherence_min: float = COHERENCE_MIN,
                      phase_freq_hz: float = PHASE_LAG_FREQ_HZ) -> ResponseMetrics:
     """Steady-state gain, resonance, phase lag at 1 Hz and -3 dB bandwidth of ``fr``.
@@ -287,9 +295,13 @@ def response_metrics(fr: FrequencyResponse, coherence_min: float = COHERENCE_MIN
             f"frequency response of {fr.output}: no frequency with coherence > {coherence_min}")
     f = fr.freq_hz[mask]
     gain = fr.gain[mask]
-    phase = fr.phase_deg[mask]
+    # unwrapped over the trusted points only: an untrusted point (an input zero, noise) in
+    # between can turn by any angle and would shift the branch of everything above it
+    phase = _unwrapped_phase_deg(fr.response[mask])
     notes: list[str] = []
     g0 = float(gain[0])
+    if f[0] > 0.0:
+        notes.append(f"steady-state gain taken at the lowest trusted frequency, {f[0]:.3g} Hz")
     i_peak = int(np.argmax(gain))
     if 0 < i_peak < gain.size - 1 and gain[i_peak] > g0 * 1.001:
         res_ratio: float | None = float(gain[i_peak] / g0)
