@@ -43,10 +43,50 @@ offset that tire nonlinearity and a rear-steer law (which changes the car's stea
 leave:
 
     delta_f = (L + K_us U^2) kappa + k_r (U kappa - r) - k_i \int e_y dt.
+
+Path-tracking driver (lane changes)
+-----------------------------------
+:class:`PathTrackingDriver` follows a smooth reference line (:class:`SplinePath`, e.g. the
+widest-margin line of :mod:`fourws_sim.corridor`) closely enough to thread the ISO 3888-2 cones,
+whatever rear-steer law the car carries. It follows the feedback-feedforward design of Kapania
+& Gerdes (2015), "Design of a feedback-feedforward steering controller for accurate path tracking
+and stability at the limits of handling", Vehicle System Dynamics 53(12): a feedforward of the
+path curvature through the steady-state car model plus feedback of the path errors, and their
+finding that the path deviation is smallest when the velocity vector (heading plus sideslip), not
+the heading, is held tangent to the path, so the angle error fed back is the *course* error
+(Rajamani (2012), Vehicle Dynamics and Control, 2nd ed., ch. 3, derives the path-error
+dynamics). Two additions make it
+independent of the law, which changes both the car's yaw gain (a factor of two between ``fws`` and
+``sol1`` on table_8_1) and the mix of yaw and sideslip in its response: an inner loop on the
+turning rate the driver feels, and a countersteer on sideslip. With the path ``y_ref(x)``, its
+heading ``theta_ref = atan y_ref'`` and curvature ``kappa_ref``, and the vehicle's CG position
+(x, y), heading ``psi``, sideslip ``beta``, speed U, yaw rate r and lateral acceleration a_y:
+
+    e_y = (y - y_ref(x)) cos(theta_ref),   e_chi = psi + beta - theta_ref       (path errors)
+    a_c = U^2 kappa_ref(x + U T_p) - w_n^2 e_y - 2 zeta w_n U sin(e_chi)        (m/s^2)
+    omega = w r + (1 - w) abar_y / U,   e_w = a_c / U - omega                   (rad/s)
+    delta_c = (L + K_us U^2) a_c / U^2 + k_p e_w + k_i \int e_w dt + k_b beta
+    T_n d(delta)/dt + delta = delta_c,   |delta| <= delta_max.
+
+The lateral-acceleration command ``a_c`` makes the path error a damped second-order system
+(natural frequency ``w_n``, damping ``zeta``) around the previewed curvature (``T_p`` looks
+ahead over the car's response lag). The felt turning rate ``omega`` mixes the yaw rate (weight
+``w``) with the course rate ``a_y / U`` (``abar_y``: a_y through a first-order lag ``T_a``, the
+seat's lateral-acceleration cue); the difference of the two is the sideslip rate, so a small ``w``
+tracks the CG path and a large one keeps the yaw in hand on laws whose lateral acceleration
+answers the front steer late (``sol1``, ``rwc4_3dof`` steer the rear out of phase). The PI on
+``e_w`` supplies what the nominal internal model (L, K_us of the vehicle file's axle cornering
+stiffnesses) gets wrong; ``k_b beta`` countersteers a sliding rear (beta < 0 in a left turn when
+the tail steps out). ``T_n`` is the driver's neuromuscular lag (a first-order lag of the
+order of 0.1 s in McRuer & Jex (1967), "A review of quasi-linear pilot models", IEEE Trans.
+HFE 8(3)); it also keeps the steering free of the fast content of the measured signals (the
+``lqr`` law's rear steer switches at the control rate). The integrator and the two lags are
+advanced by forward Euler with ``dt = t - t_previous``.
 """
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from typing import Any, Mapping, Protocol
@@ -266,6 +306,87 @@ class LanePath:
         return y_m - self.y_ref(x_m)
 
 
+class SplinePath:
+    """A smooth path ``y = y_ref(x)`` through grid points, x increasing (straight courses).
+
+    A C2 cubic spline with zero slope at both ends (scipy's ``CubicSpline``, ``clamped``); before
+    the first and after the last point the path continues straight at the end values. Besides
+    the :class:`Path` interface it gives the slope and the curvature the path-tracking driver
+    needs.
+
+    Parameters
+    ----------
+    x_m, y_m : sequence of float
+        Grid points (earth frame), m; at least 4, x strictly increasing.
+    margin_m : float
+        Clearance the planner reports for the path (``nan`` when not planned), m.
+
+    Raises
+    ------
+    ParameterError
+        Fewer than 4 points, unequal lengths, non-finite values or x not increasing.
+    """
+
+    def __init__(self, x_m: Any, y_m: Any, margin_m: float = math.nan) -> None:
+        from scipy.interpolate import CubicSpline
+
+        x = np.asarray(x_m, dtype=float)
+        y = np.asarray(y_m, dtype=float)
+        if x.ndim != 1 or x.shape != y.shape or x.size < 4:
+            raise ParameterError("path", "needs x and y of equal length >= 4")
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+            raise ParameterError("path", "points must be finite")
+        if np.any(np.diff(x) <= 0.0):
+            raise ParameterError("path", "x must increase strictly")
+        spline = CubicSpline(x, y, bc_type="clamped")
+        self.x_m = x
+        self.y_m = y
+        self.margin_m = float(margin_m)
+        # per interval [c3, c2, c1, c0] of c3 s^3 + c2 s^2 + c1 s + c0, s = x - x_i; Python
+        # floats so a call costs microseconds (the driver runs at the control rate)
+        self._xs: list[float] = x.tolist()
+        self._coeffs: list[list[float]] = spline.c.T.tolist()
+
+    def _piece(self, x_m: float) -> tuple[list[float], float]:
+        i = bisect.bisect_right(self._xs, x_m) - 1
+        i = min(max(i, 0), len(self._coeffs) - 1)
+        return self._coeffs[i], x_m - self._xs[i]
+
+    def y_ref(self, x_m: float) -> float:
+        """Reference lateral position (m) at longitudinal position ``x_m``."""
+        if x_m <= self._xs[0]:
+            return float(self.y_m[0])
+        if x_m >= self._xs[-1]:
+            return float(self.y_m[-1])
+        (c3, c2, c1, c0), s = self._piece(x_m)
+        return ((c3 * s + c2) * s + c1) * s + c0
+
+    def slope(self, x_m: float) -> float:
+        """``dy_ref/dx`` at ``x_m`` (0 outside the grid)."""
+        if x_m <= self._xs[0] or x_m >= self._xs[-1]:
+            return 0.0
+        (c3, c2, c1, _), s = self._piece(x_m)
+        return (3.0 * c3 * s + 2.0 * c2) * s + c1
+
+    def curvature(self, x_m: float) -> float:
+        """Signed path curvature ``y'' / (1 + y'^2)^(3/2)`` in 1/m (positive turning left)."""
+        if x_m <= self._xs[0] or x_m >= self._xs[-1]:
+            return 0.0
+        (c3, c2, c1, _), s = self._piece(x_m)
+        slope = (3.0 * c3 * s + 2.0 * c2) * s + c1
+        return (6.0 * c3 * s + 2.0 * c2) / (1.0 + slope * slope) ** 1.5
+
+    def preview_point(self, x_m: float, y_m: float, heading_rad: float,
+                      distance_m: float) -> tuple[float, float]:
+        """Path point ``distance_m`` ahead along x."""
+        xp = x_m + distance_m * math.cos(heading_rad)
+        return (xp, self.y_ref(xp))
+
+    def lateral_error(self, x_m: float, y_m: float) -> float:
+        """``y - y_ref(x)`` in m."""
+        return y_m - self.y_ref(x_m)
+
+
 @dataclass(frozen=True)
 class PathDriverSpec:
     """Parameters of the preview path follower (YAML key ``path_driver``).
@@ -336,6 +457,105 @@ class PreviewPathDriver:
         return min(max(delta, -limit), limit)
 
 
+@dataclass(frozen=True)
+class TrackingDriverSpec:
+    """Parameters of the path-tracking driver (YAML key ``tracking_driver``; module doc).
+
+    The defaults are the one set that drives every stable rear-steer law of fourws_control
+    through the ISO 3888-2 course at 60 km/h on table_8_1 (``config/maneuvers/
+    double_lane_change.yaml`` gives the values, their reasons and the margins they keep).
+    """
+
+    preview_time_s: float = _spec("nonnegative", default=0.047,
+                                  doc="T_p, curvature preview, s")
+    path_frequency_radps: float = _spec(default=4.6,
+                                        doc="w_n, natural frequency of the path error, rad/s")
+    path_damping: float = _spec(default=1.1, doc="zeta, damping ratio of the path error")
+    turn_rate_gain_s: float = _spec("nonnegative", default=0.37,
+                                    doc="k_p, road-wheel rad per rad/s of turning-rate error")
+    turn_integral_gain: float = _spec("nonnegative", default=1.2,
+                                      doc="k_i, road-wheel rad per rad of its integral")
+    yaw_rate_weight: float = _spec("fraction", default=0.79,
+                                   doc="w, yaw-rate share of the felt turning rate")
+    lateral_accel_lag_s: float = _spec("nonnegative", default=0.078,
+                                       doc="T_a, lag of the lateral-acceleration cue, s")
+    sideslip_gain: float = _spec("nonnegative", default=0.63,
+                                 doc="k_b, road-wheel rad of countersteer per rad of sideslip")
+    neuromuscular_lag_s: float = _spec("nonnegative", default=0.047,
+                                       doc="T_n, first-order steering lag, s")
+    steer_limit_rad: float = _spec(default=0.6, doc="|delta_f| limit, rad")
+    min_speed_mps: float = _spec(default=2.0, doc="floor of U in the 1/U terms, m/s")
+
+
+class PathTrackingDriver:
+    """Course-tracking steering driver on a :class:`SplinePath` (see the module docstring).
+
+    Parameters
+    ----------
+    spec : TrackingDriverSpec
+        Gains and lags.
+    vehicle : Vehicle
+        Wheelbase L (m) and understeer gradient K_us (rad s^2/m) of the driver's internal
+        steady-state model.
+    path : SplinePath
+        Reference line in the earth frame.
+    """
+
+    def __init__(self, spec: TrackingDriverSpec, vehicle: Vehicle, path: SplinePath) -> None:
+        self.spec = spec
+        self.path = path
+        self._wheelbase_m = vehicle.chassis.wheelbase_m
+        self._k_us = vehicle.understeer_gradient_rad_per_mps2
+        self.reset()
+
+    def reset(self) -> None:
+        """Clear the integrator and the lags (a new run)."""
+        self._integral_rad = 0.0
+        self._accel_mps2 = 0.0
+        self._steer_rad = 0.0
+        self._t_prev: float | None = None
+
+    def steer(self, t_s: float, outputs: Mapping[str, Any]) -> float:
+        """Front road-wheel angle (rad) at time ``t_s`` from the ``VehicleState`` fields
+        ``x_m``, ``y_m``, ``heading_rad``, ``speed_mps``, ``yaw_rate_radps``, ``sideslip_rad``
+        and ``lateral_accel_mps2``; advances the integrator and the lags by
+        ``t_s - t_previous``."""
+        p = self.spec
+        dt = 0.0 if self._t_prev is None else max(t_s - self._t_prev, 0.0)
+        first = self._t_prev is None
+        self._t_prev = t_s
+        x = float(outputs["x_m"])
+        y = float(outputs["y_m"])
+        speed = max(float(outputs["speed_mps"]), p.min_speed_mps)
+        beta = float(outputs["sideslip_rad"])
+        accel = float(outputs["lateral_accel_mps2"])
+        if first or p.lateral_accel_lag_s == 0.0:
+            self._accel_mps2 = accel
+        else:
+            self._accel_mps2 += (accel - self._accel_mps2) * dt / (p.lateral_accel_lag_s + dt)
+        theta = math.atan(self.path.slope(x))
+        e_y = (y - self.path.y_ref(x)) * math.cos(theta)
+        chi = float(outputs["heading_rad"]) + beta - theta
+        e_chi = math.atan2(math.sin(chi), math.cos(chi))
+        w_n = p.path_frequency_radps
+        a_c = (speed * speed * self.path.curvature(x + speed * p.preview_time_s)
+               - w_n * w_n * e_y - 2.0 * p.path_damping * w_n * speed * math.sin(e_chi))
+        felt = (p.yaw_rate_weight * float(outputs["yaw_rate_radps"])
+                + (1.0 - p.yaw_rate_weight) * self._accel_mps2 / speed)
+        error = a_c / speed - felt
+        self._integral_rad += error * dt
+        command = ((self._wheelbase_m + self._k_us * speed * speed) * a_c / (speed * speed)
+                   + p.turn_rate_gain_s * error + p.turn_integral_gain * self._integral_rad
+                   + p.sideslip_gain * beta)
+        if p.neuromuscular_lag_s == 0.0:
+            self._steer_rad = command
+        else:
+            self._steer_rad += (command - self._steer_rad) * dt / (p.neuromuscular_lag_s + dt)
+        limit = p.steer_limit_rad
+        self._steer_rad = min(max(self._steer_rad, -limit), limit)
+        return self._steer_rad
+
+
 def speed_hold_spec_from(data: Any, source: str | None, prefix: str = "speed_hold."
                          ) -> SpeedHoldSpec:
     """Validate a ``speed_hold`` mapping (``None`` gives the defaults)."""
@@ -348,8 +568,15 @@ def path_driver_spec_from(data: Any, source: str | None, prefix: str = "path_dri
     return _from_mapping(PathDriverSpec, {} if data is None else data, source, prefix)
 
 
+def tracking_driver_spec_from(data: Any, source: str | None, prefix: str = "tracking_driver."
+                              ) -> TrackingDriverSpec:
+    """Validate a ``tracking_driver`` mapping (``None`` gives the defaults)."""
+    return _from_mapping(TrackingDriverSpec, {} if data is None else data, source, prefix)
+
+
 __all__ = [
     "CirclePath", "DriverCommand", "LanePath", "N_WHEELS", "Path", "PathDriverSpec",
-    "PreviewPathDriver", "SpeedHoldDriver", "SpeedHoldSpec", "path_driver_spec_from",
-    "speed_hold_spec_from", "split_brake_torque",
+    "PathTrackingDriver", "PreviewPathDriver", "SplinePath", "SpeedHoldDriver", "SpeedHoldSpec",
+    "TrackingDriverSpec", "path_driver_spec_from", "speed_hold_spec_from", "split_brake_torque",
+    "tracking_driver_spec_from",
 ]

@@ -11,7 +11,8 @@ A maneuver file (``config/maneuvers/<name>.yaml``) is a mapping::
                                     # ... or "steering_wheel" (hand-wheel angles, divided by
                                     # the vehicle's steering.ratio)
     speed_hold: {kp_per_s: 2.0}     # optional, see fourws_sim.drivers.SpeedHoldSpec
-    path_driver: {...}              # optional, path-following types only (PathDriverSpec)
+    path_driver: {...}              # optional, constant_radius only (PathDriverSpec)
+    tracking_driver: {...}          # optional, double_lane_change only (TrackingDriverSpec)
     <type fields>                   # e.g. amplitude_rad, start_s, ramp_time_s
 
 All angles are in rad, times in s, speeds in m/s, accelerations in m/s^2. Every type holds the
@@ -40,6 +41,7 @@ ramp steer and braking in a turn are the ch. 8 maneuvers of Samsundar (1996).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path as FilePath
@@ -47,9 +49,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from fourws_sim.corridor import CorridorPlan, plan_corridor_path
+from fourws_sim.drivers import Path as ReferencePath
 from fourws_sim.drivers import (
-    CirclePath, DriverCommand, LanePath, PathDriverSpec, PreviewPathDriver, SpeedHoldDriver,
-    SpeedHoldSpec, path_driver_spec_from, speed_hold_spec_from, split_brake_torque,
+    CirclePath, DriverCommand, PathDriverSpec, PathTrackingDriver, PreviewPathDriver,
+    SpeedHoldDriver, SpeedHoldSpec, SplinePath, TrackingDriverSpec, path_driver_spec_from,
+    speed_hold_spec_from, split_brake_torque, tracking_driver_spec_from,
 )
 from fourws_sim.errors import ParameterError, UnknownNameError
 from fourws_sim.params import (CONFIG_DIR, GRAVITY_MPS2, Vehicle, _from_mapping, _spec,
@@ -302,7 +307,7 @@ class ConstantRadiusParams:
 
 @dataclass(frozen=True)
 class DoubleLaneChangeParams:
-    """ISO 3888-2 obstacle-avoidance lane change, driven by the preview path follower.
+    """ISO 3888-2 obstacle-avoidance lane change, driven by the path-tracking driver.
 
     Track (ISO 3888-2:2011, Table 1; W = ``vehicle_width_m``; the car starts at x = 0, y = 0
     heading +x, section 1 begins ``approach_m`` = x0 ahead, y = 0 on its centre line, lane
@@ -310,21 +315,20 @@ class DoubleLaneChangeParams:
     width 1.1 W + 0.25; section 2 (free) 13.5 m; section 3 x in [25.5, 36.5], width W + 1,
     its right edge 1 m left of the left edge of section 1; section 4 (free) 12.5 m; section 5
     x in [49, 61], width 1.3 W + 0.25 but at least 3 m, its right edge in line with that of
-    section 1. The reference path of the driver keeps y = ``entry_offset_m`` (negative: the
-    right half of the entry lane, where a test driver sets up for a left lane change) through
-    section 1 up to ``turn_in_x_m``, blends (raised cosine) to ``side_lane_target_m`` above the
-    section-3 right edge by ``side_lane_reach_x_m``, holds it, blends back to the centre of
-    section 5 from ``return_x_m`` to ``return_reach_x_m`` (all knots relative to x0).
+    section 1. The driver's reference line is the widest-margin line through the three gated
+    sections (:func:`fourws_sim.corridor.plan_corridor_path`) at the maneuver's speed, with
+    its lateral acceleration bounded by ``path_lateral_accel_mps2`` and its lateral jerk by
+    ``path_lateral_jerk_mps3``; it starts at the start pose and runs out straight
+    ``path_runout_m`` after section 5, on a grid of ``path_step_m``.
     """
 
     vehicle_width_m: float = _spec(default=1.7)
-    approach_m: float = _spec("nonnegative", default=30.0)
-    entry_offset_m: float = _spec("any", default=0.0)
-    turn_in_x_m: float = _spec("any", default=7.0)
-    side_lane_reach_x_m: float = _spec("any", default=28.0)
-    side_lane_target_m: float = _spec("any", default=1.0)
-    return_x_m: float = _spec("any", default=34.0)
-    return_reach_x_m: float = _spec("any", default=54.0)
+    approach_m: float = _spec(default=30.0, doc="start to section 1, m")
+    path_lateral_accel_mps2: float = _spec(default=6.25,
+                                           doc="line's lateral-acceleration bound")
+    path_lateral_jerk_mps3: float = _spec(default=30.0, doc="line's lateral-jerk bound")
+    path_runout_m: float = _spec(default=20.0, doc="straight run-out after section 5, m")
+    path_step_m: float = _spec(default=0.5, doc="grid step of the line, m")
 
     @property
     def sections(self) -> list[tuple[float, float, float, float]]:
@@ -339,26 +343,29 @@ class DoubleLaneChangeParams:
                 (x0 + 25.5, x0 + 36.5, y3_right, y3_right + w3),
                 (x0 + 49.0, x0 + 61.0, -0.5 * w1, -0.5 * w1 + w5)]
 
-    def path(self) -> LanePath:
-        """The driver's reference path (earth frame; the car starts at the origin)."""
-        (_, _, _, _), (_, _, y3r, _), (_, _, y5r, y5l) = self.sections
-        y_side = y3r + self.side_lane_target_m
-        y_exit = 0.5 * (y5r + y5l)
-        x0 = self.approach_m
-        xs = (0.0, x0 + self.turn_in_x_m, x0 + self.side_lane_reach_x_m, x0 + self.return_x_m,
-              x0 + self.return_reach_x_m, x0 + 61.0 + 100.0)
-        y0 = self.entry_offset_m
-        ys = (y0, y0, y_side, y_side, y_exit, y_exit)
-        return LanePath(xs, ys)
+    def plan(self, speed_mps: float) -> CorridorPlan:
+        """The widest-margin line for ``speed_mps`` (m/s), earth frame (cached per input)."""
+        return _planned_line(tuple(self.sections), self.vehicle_width_m, float(speed_mps),
+                             self.path_lateral_accel_mps2, self.path_lateral_jerk_mps3,
+                             self.approach_m + 61.0 + self.path_runout_m, self.path_step_m)
 
-    def _check(self, source: str | None, prefix: str) -> None:
-        xs = (-self.approach_m, self.turn_in_x_m, self.side_lane_reach_x_m, self.return_x_m,
-              self.return_reach_x_m, 161.0)
-        if any(b <= a for a, b in zip(xs, xs[1:])):
-            raise ParameterError(f"{prefix}turn_in_x_m",
-                                 "path knots must increase: -approach_m < turn_in_x_m < "
-                                 "side_lane_reach_x_m < return_x_m < return_reach_x_m < 161",
-                                 source)
+    def path(self, speed_mps: float) -> SplinePath:
+        """The driver's reference line for ``speed_mps`` (m/s) as a :class:`SplinePath`."""
+        plan = self.plan(speed_mps)
+        return SplinePath(plan.x_m, plan.y_m, plan.margin_m)
+
+
+@functools.lru_cache(maxsize=32)
+def _planned_line(sections: tuple[tuple[float, float, float, float], ...], width_m: float,
+                  speed_mps: float, accel_mps2: float, jerk_mps3: float, x_end_m: float,
+                  step_m: float) -> CorridorPlan:
+    """:func:`plan_corridor_path` from the start pose, cached: a run, its twin in the node graph
+    and every law of a comparison plan the same line once (two linear programs, ~0.1 s)."""
+    plan = plan_corridor_path(sections, width_m, speed_mps, accel_mps2, jerk_mps3,
+                              x_start_m=0.0, x_end_m=x_end_m, step_m=step_m)
+    plan.x_m.flags.writeable = False
+    plan.y_m.flags.writeable = False
+    return plan
 
 
 @dataclass(frozen=True)
@@ -417,9 +424,10 @@ MANEUVER_TYPES: dict[str, type] = {
     "double_lane_change": DoubleLaneChangeParams,
     "brake_in_turn": BrakeInTurnParams,
 }
-_PATH_TYPES = ("constant_radius", "double_lane_change")
+#: Maneuver type -> its driver key (path-following types only).
+_DRIVER_KEYS = {"constant_radius": "path_driver", "double_lane_change": "tracking_driver"}
 _COMMON = ("name", "type", "description", "initial_speed_mps", "duration_s", "steer_input",
-           "speed_hold", "path_driver")
+           "speed_hold", "path_driver", "tracking_driver")
 
 
 @dataclass(frozen=True)
@@ -435,6 +443,7 @@ class ManeuverSpec:
     description: str = ""
     speed_hold: SpeedHoldSpec = field(default_factory=SpeedHoldSpec)
     path_driver: PathDriverSpec | None = None
+    tracking_driver: TrackingDriverSpec | None = None
     source: str = ""
 
     def to_dict(self) -> dict[str, Any]:
@@ -447,6 +456,8 @@ class ManeuverSpec:
         }
         if self.path_driver is not None:
             out["path_driver"] = dataclasses.asdict(self.path_driver)
+        if self.tracking_driver is not None:
+            out["tracking_driver"] = dataclasses.asdict(self.tracking_driver)
         out.update(dataclasses.asdict(self.params))
         return out
 
@@ -496,18 +507,25 @@ def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
         raise ParameterError("steer_input",
                              f"must be one of {', '.join(STEER_INPUTS)}, got {steer_input!r}",
                              source)
-    if "path_driver" in data and kind not in _PATH_TYPES:
-        raise ParameterError("path_driver", f"only for {', '.join(_PATH_TYPES)}", source)
+    for key in ("path_driver", "tracking_driver"):
+        if key in data and _DRIVER_KEYS.get(kind) != key:
+            types = [k for k, v in _DRIVER_KEYS.items() if v == key]
+            raise ParameterError(key, f"only for {', '.join(types)}", source)
     type_fields = {k: v for k, v in data.items() if k not in _COMMON}
     params = _from_mapping(MANEUVER_TYPES[kind], type_fields, source, "")
     if kind == "constant_radius" and params.final_speed_mps < common["initial_speed_mps"]:
         raise ParameterError("final_speed_mps", "must be >= initial_speed_mps", source)
+    if kind == "double_lane_change" and common["initial_speed_mps"] <= 0.0:
+        raise ParameterError("initial_speed_mps", "must be > 0 (the line is planned for it)",
+                             source)
     return ManeuverSpec(
         name=name, type=kind, params=params, steer_input=steer_input,
         description=str(data.get("description", "")),
         speed_hold=speed_hold_spec_from(data.get("speed_hold"), source),
         path_driver=(path_driver_spec_from(data.get("path_driver"), source)
-                     if kind in _PATH_TYPES else None),
+                     if kind == "constant_radius" else None),
+        tracking_driver=(tracking_driver_spec_from(data.get("tracking_driver"), source)
+                         if kind == "double_lane_change" else None),
         source=source, **common)
 
 
@@ -549,7 +567,7 @@ class Maneuver:
         # angle (ratio 1); they only run road-wheel inputs.
         self._ratio = vehicle.steering.ratio if vehicle.steering is not None else 1.0
         self._speed_driver = SpeedHoldDriver(spec.speed_hold, vehicle)
-        self._path_driver: PreviewPathDriver | None = None
+        self._path_driver: PreviewPathDriver | PathTrackingDriver | None = None
         self._random: np.ndarray | None = None
         self._random_index = np.empty(0)
         self._hold_after_brake_mps: float | None = None
@@ -560,8 +578,9 @@ class Maneuver:
             self._path_driver = PreviewPathDriver(spec.path_driver, vehicle,
                                                   CirclePath(p.radius_m, direction))
         elif spec.type == "double_lane_change":
-            assert spec.path_driver is not None
-            self._path_driver = PreviewPathDriver(spec.path_driver, vehicle, p.path())
+            assert spec.tracking_driver is not None
+            self._path_driver = PathTrackingDriver(spec.tracking_driver, vehicle,
+                                                   p.path(spec.initial_speed_mps))
         elif spec.type == "random_steer":
             self._random = p.samples()
             self._random_index = np.arange(self._random.size, dtype=float)
@@ -571,6 +590,11 @@ class Maneuver:
     def name(self) -> str:
         """Maneuver name."""
         return self.spec.name
+
+    @property
+    def reference_path(self) -> ReferencePath | None:
+        """The path the path-following driver follows (None for open-loop types)."""
+        return None if self._path_driver is None else self._path_driver.path
 
     @property
     def initial_speed_mps(self) -> float:
@@ -615,8 +639,9 @@ class Maneuver:
             Tick time in s (``VehicleState.sim_time_s``), increasing from call to call.
         outputs : mapping
             ``VehicleState`` fields; read here: ``speed_mps`` (all types), ``x_m``, ``y_m``,
-            ``heading_rad``, ``yaw_rate_radps`` (path-following types). :meth:`done` also
-            reads ``lateral_accel_mps2`` and ``sideslip_rad``.
+            ``heading_rad``, ``yaw_rate_radps`` (path-following types), ``sideslip_rad`` and
+            ``lateral_accel_mps2`` (``double_lane_change``). :meth:`done` also reads
+            ``lateral_accel_mps2`` and ``sideslip_rad``.
         """
         speed = float(outputs["speed_mps"])
         if self._path_driver is not None:
