@@ -274,38 +274,6 @@ class CirclePath:
         return self.direction * (self.radius_m - dist)
 
 
-@dataclass(frozen=True)
-class LanePath:
-    """A path ``y = y_ref(x)`` for straight-ahead courses (lane changes), x increasing.
-
-    Knots are joined by raised-cosine (C1) blends so the reference has no heading jumps.
-    """
-
-    x_knots_m: tuple[float, ...]
-    y_knots_m: tuple[float, ...]
-
-    def y_ref(self, x_m: float) -> float:
-        """Reference lateral position (m) at longitudinal position ``x_m``."""
-        xs, ys = self.x_knots_m, self.y_knots_m
-        if x_m <= xs[0]:
-            return ys[0]
-        if x_m >= xs[-1]:
-            return ys[-1]
-        i = int(np.searchsorted(xs, x_m, side="right")) - 1
-        s = (x_m - xs[i]) / (xs[i + 1] - xs[i])
-        return ys[i] + (ys[i + 1] - ys[i]) * 0.5 * (1.0 - math.cos(math.pi * s))
-
-    def preview_point(self, x_m: float, y_m: float, heading_rad: float,
-                      distance_m: float) -> tuple[float, float]:
-        """Path point ``distance_m`` ahead along x."""
-        xp = x_m + distance_m * math.cos(heading_rad)
-        return (xp, self.y_ref(xp))
-
-    def lateral_error(self, x_m: float, y_m: float) -> float:
-        """``y - y_ref(x)`` in m."""
-        return y_m - self.y_ref(x_m)
-
-
 class SplinePath:
     """A smooth path ``y = y_ref(x)`` through grid points, x increasing (straight courses).
 
@@ -575,7 +543,7 @@ def tracking_driver_spec_from(data: Any, source: str | None, prefix: str = "trac
 
 
 __all__ = [
-    "CirclePath", "DriverCommand", "LanePath", "N_WHEELS", "Path", "PathDriverSpec",
+    "CirclePath", "DriverCommand", "N_WHEELS", "Path", "PathDriverSpec",
     "PathTrackingDriver", "PreviewPathDriver", "SplinePath", "SpeedHoldDriver", "SpeedHoldSpec",
     "TrackingDriverSpec", "path_driver_spec_from", "speed_hold_spec_from", "split_brake_torque",
     "tracking_driver_spec_from",
