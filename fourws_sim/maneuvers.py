@@ -523,9 +523,9 @@ def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
         description=str(data.get("description", "")),
         speed_hold=speed_hold_spec_from(data.get("speed_hold"), source),
         path_driver=(path_driver_spec_from(data.get("path_driver"), source)
-                     if kind == "constant_radius" else None),
+                     if _DRIVER_KEYS.get(kind) == "path_driver" else None),
         tracking_driver=(tracking_driver_spec_from(data.get("tracking_driver"), source)
-                         if kind == "double_lane_change" else None),
+                         if _DRIVER_KEYS.get(kind) == "tracking_driver" else None),
         source=source, **common)
 
 
