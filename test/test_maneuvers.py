@@ -388,18 +388,14 @@ def _dlc_run(law: str) -> tuple:
     return spec, run_closed_loop(load_vehicle("table_8_1"), spec, law)
 
 
-def _gate_clearances(res, p) -> list[float]:
-    """Per gated section, the smallest distance (m) between the body (CG +- W/2) and the cone
-    lines, as test_closed_loop's DLC test checks them."""
-    half = 0.5 * p.vehicle_width_m
+def _course_clearance(res, p) -> float:
+    """Smallest distance (m) between the body (CG +- W/2) and the cone lines over the gated
+    sections (:func:`fourws_sim.corridor.clearance`), after checking that the car drove
+    through every section."""
     x, y = res["x_m"], res["y_m"]
-    out = []
-    for x0, x1, y_right, y_left in p.sections:
-        inside = (x >= x0) & (x <= x1)
-        assert inside.sum() > 10  # the car did drive through the section
-        out.append(float(min(np.min(y[inside] - half - y_right),
-                             np.min(y_left - y[inside] - half))))
-    return out
+    for x0, x1, _, _ in p.sections:
+        assert ((x >= x0) & (x <= x1)).sum() > 10  # the car did drive through the section
+    return clearance(x, y, p.sections, p.vehicle_width_m)
 
 
 def _peak_slip_angle_rad(vehicle) -> float:
@@ -427,15 +423,15 @@ def test_dlc_at_60_kmh_with_every_law(law: str) -> None:
     the laws of DLC_NOT_DRIVABLE hit cones because their car slides, its tires past the slip
     angle of their peak force (STI tire, Table C.1)."""
     spec, res = _dlc_run(law)
-    clearances = _gate_clearances(res, spec.params)
+    margin = _course_clearance(res, spec.params)
     sideslip_deg = math.degrees(float(np.max(np.abs(res["sideslip_rad"]))))
     if law in DLC_NOT_DRIVABLE:
-        assert min(clearances) < 0.0
+        assert margin < 0.0
         assert sideslip_deg > 15.0
         assert np.max(np.abs(res["slip_angle_rad"])) > _peak_slip_angle_rad(
             load_vehicle("table_8_1"))
         return
-    assert min(clearances) > DLC_MIN_CLEARANCE_M
+    assert margin > DLC_MIN_CLEARANCE_M
     assert sideslip_deg < 10.0
     steer = res.driver["front_wheel_angle_rad"]
     assert np.max(np.abs(np.diff(steer) / np.diff(res.time_s))) < 1.2
