@@ -9,7 +9,8 @@ PACKAGE = "fourws"
 setup(
     name=PACKAGE,
     version="0.1.0",
-    packages=find_packages(include=["fourws_sim*", "fourws_control*", "fourws_analysis*",
+    packages=find_packages(include=["fourws_sim*", "fourws_control*", "fourws_run*",
+                                    "fourws_analysis*",
                                     "fourws_ros*", "fourws_cli*"]),
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),

@@ -1,16 +1,18 @@
-"""The one place where fourws touches rosbag2 files: typestore, reader, writer, resampling.
+"""Recorded runs as arrays: the one bag-to-arrays loader of the analysis, and resampling.
 
-A recorded run is a rosbag2 bag (MCAP storage) holding the topics of ``docs/architecture.md``;
-``/fourws/run_config`` (``std_msgs/String``, JSON) holds the run's configuration (vehicle mapping,
-maneuver mapping with a ``type`` key, law, model, clock mode, periods).
+A recorded run is a rosbag2 bag (MCAP storage) holding the topics of
+:mod:`fourws_run.interface`; ``/fourws/run_config`` (``std_msgs/String``, JSON of
+:class:`fourws_run.config.RunConfig`) describes the run, or, for a graph started by hand, the
+nodes' own ``/fourws/node_config`` messages do. Writing, checksums, accounting and repair are
+:mod:`fourws_run.bagfile`; this module reads.
 
-* :func:`typestore` -- a rosbags typestore with the fourws messages (registered from the text of
-  ``msg/*.msg``) on top of the ROS 2 standard types (std, nav, sensor, rosgraph, builtin).
-* :class:`BagWriter` -- a small writer (rosbag2 version 9, MCAP storage) used by the recorder
-  node and by the tests.
-* :func:`load_bag` -- a bag turned into per-topic arrays (:class:`RunData`).
+* :func:`load_bag` -- a bag turned into per-topic arrays (:class:`RunData`). Only complete,
+  checksum-verified bags load; an incomplete or damaged one is an error naming what is
+  missing, unless ``allow_incomplete`` (then :attr:`RunData.complete` is False and
+  :attr:`RunData.warnings` says why, and every metric computed from it is flagged).
 * :func:`resample` -- one uniform time grid for every channel the analysis uses
   (:class:`UniformRun`), since ROS stamps are not evenly spaced.
+* :func:`write_run` -- arrays of an offline simulation written as a bag.
 
 Messages with fixed layout (every ``VehicleState`` of a run has the same ``frame_id`` and
 ``model`` strings) are decoded in bulk with numpy structured arrays; this is what lets a 60 s
@@ -22,85 +24,34 @@ from __future__ import annotations
 
 import json
 import math
-import struct
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 import numpy as np
 
+from fourws_run import interface
+from fourws_run.accounting import RunAccount, TopicAccount
+from fourws_run.bagfile import BagError, BagWriter, read_bag, typestore
+from fourws_run.interface import CLOCK as TOPIC_CLOCK
+from fourws_run.interface import DRIVER_INPUT as TOPIC_DRIVER
+from fourws_run.interface import IMU as TOPIC_IMU
+from fourws_run.interface import MANEUVER_STATUS as TOPIC_MANEUVER_STATUS
+from fourws_run.interface import NODE_CONFIG as TOPIC_NODE_CONFIG
+from fourws_run.interface import ODOM as TOPIC_ODOM
+from fourws_run.interface import REAR_STEER_CMD as TOPIC_REAR_CMD
+from fourws_run.interface import RUN_CONFIG as TOPIC_RUN_CONFIG
+from fourws_run.interface import SIM_STATUS as TOPIC_SIM_STATUS
+from fourws_run.interface import STATE as TOPIC_STATE
+from fourws_run.interface import TOPIC_TYPES
 from fourws_sim.errors import FourwsError
-from fourws_sim.params import find_resource_dir
 
-#: Folder with the fourws ``.msg`` definitions.
-MSG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "msg", "fourws_msgs", "msg",
-                            "*.msg")
-#: ROS package name the ``.msg`` files are built into.
-MSG_PACKAGE = "fourws_msgs"
-
-TOPIC_STATE = "/fourws/state"
-TOPIC_DRIVER = "/fourws/driver_input"
-TOPIC_REAR_CMD = "/fourws/rear_steer_cmd"
-TOPIC_MANEUVER_STATUS = "/fourws/maneuver_status"
-TOPIC_SIM_STATUS = "/fourws/sim_status"
-TOPIC_ODOM = "/fourws/odom"
-TOPIC_IMU = "/fourws/imu"
-TOPIC_RUN_CONFIG = "/fourws/run_config"
-TOPIC_CLOCK = "/clock"
-
-#: Message type of every fourws topic (rosbags spelling ``pkg/msg/Name``).
-TOPIC_TYPES: dict[str, str] = {
-    TOPIC_STATE: f"{MSG_PACKAGE}/msg/VehicleState",
-    TOPIC_DRIVER: f"{MSG_PACKAGE}/msg/DriverInput",
-    TOPIC_REAR_CMD: f"{MSG_PACKAGE}/msg/RearSteerCommand",
-    TOPIC_MANEUVER_STATUS: f"{MSG_PACKAGE}/msg/ManeuverStatus",
-    TOPIC_SIM_STATUS: f"{MSG_PACKAGE}/msg/SimulatorStatus",
-    TOPIC_ODOM: "nav_msgs/msg/Odometry",
-    TOPIC_IMU: "sensor_msgs/msg/Imu",
-    TOPIC_RUN_CONFIG: "std_msgs/msg/String",
-    TOPIC_CLOCK: "rosgraph_msgs/msg/Clock",
-}
-
-#: The maneuver types a run configuration may name.
-MANEUVER_TYPES = ("step_steer", "ramp_steer", "sine", "swept_sine", "random_steer", "pulse",
-                  "slow_ramp_steer", "constant_radius", "double_lane_change", "brake_in_turn")
-
-_NS_PER_S = 1_000_000_000
+_NS_PER_S = interface.NS_PER_S
 _CDR_HEADER_BYTES = 4  # encapsulation kind + options precede the CDR payload
-
-
-class BagError(FourwsError):
-    """A bag is missing, unreadable, truncated, or lacks a topic or field the analysis needs."""
 
 
 class MetricUnavailableError(FourwsError):
     """A metric cannot be computed from the given run (wrong maneuver, no excitation, ...)."""
-
-
-# --------------------------------------------------------------------------------------------
-# typestore
-
-
-@lru_cache(maxsize=1)
-def typestore() -> Any:
-    """Rosbags typestore: ROS 2 (kilted) standard types plus the fourws messages.
-
-    The fourws types are parsed from the text of ``msg/*.msg`` so the bags carry exactly the
-    definitions the ROS nodes were built from.
-
-    Returns
-    -------
-    rosbags.typesys.store.Typestore
-    """
-    from rosbags.typesys import Stores, get_typestore, get_types_from_msg
-
-    store = get_typestore(Stores.ROS2_KILTED)
-    types: dict[str, Any] = {}
-    for path in sorted(MSG_DIR.glob("*.msg")):
-        types.update(get_types_from_msg(path.read_text(), f"{MSG_PACKAGE}/msg/{path.stem}"))
-    store.register(types)
-    return store
 
 
 def make_message(msgtype: str, **values: Any) -> Any:
@@ -161,111 +112,6 @@ def stamp(time_s: float) -> dict[str, int]:
 
 
 # --------------------------------------------------------------------------------------------
-# writer
-
-
-class BagWriter:
-    """Write a fourws run as a rosbag2 bag (format version 9, MCAP storage).
-
-    Use as a context manager::
-
-        with BagWriter("runs/step") as bag:
-            bag.write_run_config(config)
-            bag.write(TOPIC_STATE, make_message(TOPIC_TYPES[TOPIC_STATE], ...), t_ns)
-
-    Connections are added on first use of a topic with its type from :data:`TOPIC_TYPES`
-    (other topics need :meth:`add_topic`). :meth:`write_raw` takes already serialized CDR bytes
-    (e.g. from ``rclpy.serialization.serialize_message``) so a recorder never deserializes.
-
-    Parameters
-    ----------
-    path : str or Path
-        Bag directory to create; it must not exist.
-
-    Raises
-    ------
-    BagError
-        If ``path`` exists or the bag cannot be created.
-    """
-
-    #: rosbag2 metadata format version written.
-    VERSION = 9
-
-    def __init__(self, path: str | Path) -> None:
-        from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
-
-        self.path = Path(path)
-        try:
-            self._writer = Writer(self.path, version=self.VERSION,
-                                  storage_plugin=StoragePlugin.MCAP)
-        except WriterError as exc:
-            raise BagError(f"cannot create bag {str(self.path)!r}: {exc}") from None
-        self._connections: dict[str, Any] = {}
-        self._open = False
-
-    def open(self) -> "BagWriter":
-        """Create the bag on disk."""
-        self._writer.open()
-        self._open = True
-        return self
-
-    def close(self) -> None:
-        """Write the metadata and close the bag."""
-        if self._open:
-            self._writer.close()
-            self._open = False
-
-    def __enter__(self) -> "BagWriter":
-        return self.open()
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    def add_topic(self, topic: str, msgtype: str | None = None, *,
-                  transient_local: bool = False) -> Any:
-        """Register ``topic`` (type from :data:`TOPIC_TYPES` unless given); returns the connection.
-
-        ``transient_local`` records the offered durability (``/fourws/run_config`` is latched).
-        """
-        if topic in self._connections:
-            return self._connections[topic]
-        if msgtype is None:
-            if topic not in TOPIC_TYPES:
-                raise BagError(f"topic {topic!r}: unknown type; pass msgtype")
-            msgtype = TOPIC_TYPES[topic]
-        from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
-                                        QosReliability, QosTime)
-
-        durability = (QosDurability.TRANSIENT_LOCAL if transient_local
-                      else QosDurability.VOLATILE)
-        qos = Qos(QosHistory.KEEP_LAST, 1 if transient_local else 10, QosReliability.RELIABLE,
-                  durability, QosTime(0, 0), QosTime(0, 0), QosLiveliness.AUTOMATIC,
-                  QosTime(0, 0), False)
-        conn = self._writer.add_connection(topic, msgtype, typestore=typestore(),
-                                           offered_qos_profiles=[qos])
-        self._connections[topic] = conn
-        return conn
-
-    def write(self, topic: str, message: Any, time_ns: int) -> None:
-        """Serialize a rosbags message object and write it at receive time ``time_ns`` (ns)."""
-        conn = self.add_topic(topic)
-        data = typestore().serialize_cdr(message, conn.msgtype)
-        self._writer.write(conn, int(time_ns), data)
-
-    def write_raw(self, topic: str, data: bytes | memoryview, time_ns: int,
-                  msgtype: str | None = None) -> None:
-        """Write already serialized CDR bytes of ``topic`` at ``time_ns`` (ns)."""
-        conn = self.add_topic(topic, msgtype, transient_local=topic == TOPIC_RUN_CONFIG)
-        self._writer.write(conn, int(time_ns), data)
-
-    def write_run_config(self, config: Mapping[str, Any], time_ns: int = 0) -> None:
-        """Write the run configuration as JSON on ``/fourws/run_config`` (transient local)."""
-        self.add_topic(TOPIC_RUN_CONFIG, transient_local=True)
-        msg = make_message(TOPIC_TYPES[TOPIC_RUN_CONFIG], data=json.dumps(config))
-        self.write(TOPIC_RUN_CONFIG, msg, time_ns)
-
-
-# --------------------------------------------------------------------------------------------
 # reader
 
 _NUMPY_TYPES = {
@@ -310,12 +156,19 @@ class RunData:
     topics : dict of str to TopicArrays
     warnings : list of str
         Problems that did not stop the reading (e.g. a truncated bag read up to its damage).
+    complete : bool or None
+        The bag holds every message of its run, checksums verified (None: the bag carries no
+        accounting, so completeness is unknown).
+    problems : list of str
+        What is missing or damaged (empty when complete).
     """
 
     path: str
     config: dict[str, Any]
     topics: dict[str, TopicArrays] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    complete: bool | None = None
+    problems: list[str] = field(default_factory=list)
 
     @property
     def name(self) -> str:
@@ -465,82 +318,8 @@ def _decode(msgtype: str, raws: list[bytes]) -> dict[str, np.ndarray]:
     return fixed if fixed is not None else _decode_generic(msgtype, raws)
 
 
-def _open_error(path: Path, exc: BaseException) -> BagError:
-    return BagError(f"cannot read bag {str(path)!r}: truncated or corrupt "
-                    f"({type(exc).__name__}: {exc})")
-
-
-#: What the rosbags/MCAP readers raise on a damaged file.
-_READ_ERRORS: tuple[type[BaseException], ...] = (
-    OSError, EOFError, KeyError, IndexError, ValueError, AssertionError, OverflowError,
-    UnicodeDecodeError, struct.error, MemoryError)
-
-
-def _read_rosbag2(path: Path, wanted: set[str] | None, store: Any
-                  ) -> tuple[dict[str, list[bytes]], dict[str, list[int]], dict[str, str]]:
-    """Raw CDR bytes, receive times (ns from bag start) and types per topic, via rosbags."""
-    from rosbags.rosbag2 import Reader, ReaderError
-
-    raw_by_topic: dict[str, list[bytes]] = {}
-    recv_by_topic: dict[str, list[int]] = {}
-    types: dict[str, str] = {}
-    try:
-        with Reader(path) as reader:
-            conns = [c for c in reader.connections
-                     if (wanted is None or c.topic in wanted or c.topic == TOPIC_RUN_CONFIG)
-                     and c.msgtype in store.types]
-            start_ns = reader.start_time if reader.message_count else 0
-            for conn, t_ns, raw in reader.messages(connections=conns) if conns else ():
-                raw_by_topic.setdefault(conn.topic, []).append(raw)
-                recv_by_topic.setdefault(conn.topic, []).append(t_ns - start_ns)
-                types[conn.topic] = conn.msgtype
-    except ReaderError as exc:
-        raise ValueError(str(exc)) from None
-    return raw_by_topic, recv_by_topic, types
-
-
-def _salvage_mcap(path: Path, wanted: set[str] | None, store: Any
-                  ) -> tuple[dict[str, list[bytes]], dict[str, list[int]], dict[str, str]]:
-    """Read an MCAP file record by record up to its first damage (a recorder killed mid-run).
-
-    Returns empty mappings when nothing can be recovered.
-    """
-    from mcap.exceptions import McapError
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-
-    files = sorted(path.glob("*.mcap")) if path.is_dir() else [path]
-    raw_by_topic: dict[str, list[bytes]] = {}
-    recv_by_topic: dict[str, list[int]] = {}
-    types: dict[str, str] = {}
-    for file in files:
-        schemas: dict[int, str] = {}
-        channels: dict[int, tuple[str, str]] = {}
-        try:
-            with open(file, "rb") as stream:
-                for record in StreamReader(stream, validate_crcs=True).records:
-                    if isinstance(record, Schema):
-                        schemas[record.id] = record.name
-                    elif isinstance(record, Channel):
-                        channels[record.id] = (record.topic, schemas.get(record.schema_id, ""))
-                    elif isinstance(record, Message) and record.channel_id in channels:
-                        topic, msgtype = channels[record.channel_id]
-                        if msgtype not in store.types or (
-                                wanted is not None and topic not in wanted
-                                and topic != TOPIC_RUN_CONFIG):
-                            continue
-                        raw_by_topic.setdefault(topic, []).append(bytes(record.data))
-                        recv_by_topic.setdefault(topic, []).append(record.log_time)
-                        types[topic] = msgtype
-        except _READ_ERRORS + (McapError,):
-            pass  # the damage: keep what came before it
-    start = min((t[0] for t in recv_by_topic.values()), default=0)
-    for topic in recv_by_topic:
-        recv_by_topic[topic] = [t - start for t in recv_by_topic[topic]]
-    return raw_by_topic, recv_by_topic, types
-
-
-def load_bag(path: str | Path, topics: Iterable[str] | None = None) -> RunData:
+def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
+             allow_incomplete: bool = False) -> RunData:
     """Read a rosbag2 bag (directory or ``.mcap`` file) into per-topic arrays.
 
     Parameters
@@ -549,6 +328,10 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None) -> RunData:
         Bag directory (with ``metadata.yaml``) or a single ``.mcap`` file.
     topics : iterable of str, optional
         Topics to decode (default: every topic whose type the typestore knows).
+    allow_incomplete : bool
+        Load a bag that is damaged or does not hold every message of its run (a killed
+        recorder, a failed run): what its checked chunks hold is read, ``complete`` is False
+        and ``warnings`` says what is missing. Default: such a bag is an error.
 
     Returns
     -------
@@ -557,26 +340,42 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None) -> RunData:
     Raises
     ------
     BagError
-        If the bag is missing, truncated or corrupt, or ``/fourws/run_config`` is not JSON.
+        If the bag is missing, damaged (a checksum fails, a record is truncated) or incomplete
+        (and ``allow_incomplete`` is false), or its run description is not valid JSON.
     """
     path = Path(path)
-    if not path.exists():
-        raise BagError(f"bag {str(path)!r} does not exist")
+    messages, check = read_bag(path)
+    if check.problems and not allow_incomplete:
+        raise BagError(f"bag {str(path)!r} is incomplete or damaged: "
+                       + "; ".join(check.problems[:4])
+                       + (f" (+{len(check.problems) - 4} more)" if len(check.problems) > 4
+                          else "")
+                       + "; use --allow-incomplete to analyse what it holds")
+    if not messages:
+        raise BagError(f"bag {str(path)!r} holds no readable message")
+    warnings = [f"incomplete or damaged bag: {p}" for p in check.problems]
+    if check.complete is None and not check.problems:
+        warnings.append("the bag carries no recording accounting (written by an older fourws "
+                        "or another tool): its completeness is not verified")
     wanted = set(topics) if topics is not None else None
     store = typestore()
-    warnings: list[str] = []
-    try:
-        raw_by_topic, recv_by_topic, types = _read_rosbag2(path, wanted, store)
-    except _READ_ERRORS as exc:
-        error = _open_error(path, exc)
-        raw_by_topic, recv_by_topic, types = _salvage_mcap(path, wanted, store)
-        if not raw_by_topic:
-            raise error from None
-        warnings.append(f"{error}; recovered {sum(map(len, raw_by_topic.values()))} "
-                        "messages from the complete chunks")
+    raw_by_topic: dict[str, list[bytes]] = {}
+    recv_by_topic: dict[str, list[int]] = {}
+    types: dict[str, str] = {}
+    # file order is chunk order; rosbag2 readers give messages in log-time order
+    for m in sorted(messages, key=lambda m: m.log_time_ns):
+        if m.msgtype not in store.types or (
+                wanted is not None and m.topic not in wanted
+                and m.topic not in (TOPIC_RUN_CONFIG, TOPIC_NODE_CONFIG)):
+            continue
+        raw_by_topic.setdefault(m.topic, []).append(m.data)
+        recv_by_topic.setdefault(m.topic, []).append(m.log_time_ns)
+        types[m.topic] = m.msgtype
+    start = min((t[0] for t in recv_by_topic.values()), default=0)
 
     config: dict[str, Any] = {}
-    result = RunData(path=str(path), config=config, warnings=warnings)
+    result = RunData(path=str(path), config=config, warnings=warnings,
+                     complete=check.complete, problems=list(check.problems))
     for topic, raws in raw_by_topic.items():
         msgtype = types[topic]
         try:
@@ -591,20 +390,43 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None) -> RunData:
             time_s = (fields["clock.sec"].astype(np.float64)
                       + fields["clock.nanosec"].astype(np.float64) * 1e-9)
         else:
-            time_s = np.asarray(recv_by_topic[topic], dtype=np.float64) * 1e-9
+            time_s = (np.asarray(recv_by_topic[topic], dtype=np.float64) - start) * 1e-9
         result.topics[topic] = TopicArrays(time_s=time_s, fields=fields)
-
-    if TOPIC_RUN_CONFIG in result.topics:
-        text = str(result.topics[TOPIC_RUN_CONFIG].fields["data"][-1])
-        try:
-            loaded = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise BagError(f"bag {str(path)!r}: {TOPIC_RUN_CONFIG} is not JSON ({exc})") \
-                from None
-        if not isinstance(loaded, dict):
-            raise BagError(f"bag {str(path)!r}: {TOPIC_RUN_CONFIG} is not a JSON object")
-        config.update(loaded)
+    config.update(_run_description(result))
     return result
+
+
+def _json_object(run: RunData, topic: str, text: str) -> dict[str, Any]:
+    try:
+        loaded = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise BagError(f"bag {run.path!r}: {topic} is not JSON ({exc})") from None
+    if not isinstance(loaded, dict):
+        raise BagError(f"bag {run.path!r}: {topic} is not a JSON object")
+    return loaded
+
+
+def _run_description(run: RunData) -> dict[str, Any]:
+    """The run configuration mapping: ``/fourws/run_config`` if the bag has one, else put
+    together from the nodes' ``/fourws/node_config`` (a graph started by hand); the law of a
+    controller that publishes no configuration is the name its commands give."""
+    from fourws_run.config import RunConfig
+
+    if TOPIC_RUN_CONFIG in run.topics:
+        return _json_object(run, TOPIC_RUN_CONFIG,
+                            str(run.topics[TOPIC_RUN_CONFIG].fields["data"][-1]))
+    if TOPIC_NODE_CONFIG not in run.topics:
+        return {}
+    parts = [_json_object(run, TOPIC_NODE_CONFIG, str(text))
+             for text in run.topics[TOPIC_NODE_CONFIG].fields["data"]]
+    cmd = run.topics.get(TOPIC_REAR_CMD)
+    laws = sorted(set(cmd.fields["law"])) if cmd is not None and len(cmd) else []
+    try:
+        config = RunConfig.from_node_configs(parts, law_label="+".join(laws))
+    except (FourwsError, KeyError, TypeError, ValueError) as exc:
+        run.warnings.append(f"the nodes' configurations do not describe the run ({exc})")
+        return {}
+    return config.to_dict()
 
 
 # --------------------------------------------------------------------------------------------
@@ -766,3 +588,6 @@ def write_run(path: str | Path, time_s: np.ndarray, state: Mapping[str, np.ndarr
                     else:
                         getattr(msg, key)[:] = arr[i]
                 bag.write_raw(topic, store.serialize_cdr(msg, msgtype), max(ns, 0))
+        # the writer is the only publisher here and wrote everything it was given
+        account = RunAccount({t: TopicAccount(t, n, n) for t, n in bag.counts.items()})
+        bag.set_accounting(account.to_dict(), account.complete)

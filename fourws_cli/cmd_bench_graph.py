@@ -39,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _scenario(duration_s: float, **changes):
     from fourws_sim.maneuvers import maneuver_spec_from_mapping
-    from fourws_sim.scenario import load_scenario
+    from fourws_run.scenario import load_scenario
 
     sc = load_scenario("default")
     spec = sc.maneuver.to_dict()
@@ -51,15 +51,16 @@ def run(args: argparse.Namespace) -> int:
     """Run the benchmark; returns the exit code."""
     from fourws_analysis.bag import load_bag
     from fourws_ros import topics
-    from fourws_ros.launcher import run_graph
+    from fourws_ros.graph_run import run_graph
+    from fourws_run.config import RunConfig
 
     out = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="fourws-bench-"))
     quiet = (lambda _text: None) if args.json else None
     result: dict[str, object] = {"load_average_before": os.getloadavg()[0]}
     ok = True
     try:
-        lock = run_graph(_scenario(args.lockstep_seconds), "sol1", out, run_name="lockstep",
-                         echo=quiet)
+        lock = run_graph(RunConfig.from_scenario(_scenario(args.lockstep_seconds), "sol1"), out,
+                         run_name="lockstep", echo=quiet)
         ok &= lock.ok
         result.update({
             "lockstep_ok": lock.ok, "lockstep_sim_s": lock.sim_time_s,
@@ -70,9 +71,9 @@ def run(args: argparse.Namespace) -> int:
         })
         if args.realtime_seconds > 0:
             period = 1.0 / args.state_rate_hz
-            rt = run_graph(_scenario(args.realtime_seconds, clock_mode="realtime",
-                                     state_period_s=period), "sol1", out, run_name="realtime",
-                           echo=quiet)
+            rt = run_graph(RunConfig.from_scenario(
+                _scenario(args.realtime_seconds, clock_mode="realtime", state_period_s=period),
+                "sol1"), out, run_name="realtime", echo=quiet)
             ok &= rt.ok
             state = load_bag(rt.bag_path, topics=[topics.STATE]).topics[topics.STATE]
             span = float(state.time_s[-1] - state.time_s[0]) if len(state) > 1 else 0.0

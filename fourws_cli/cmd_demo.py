@@ -26,8 +26,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the scenario's laws, analyse the bags, print where everything is."""
     from fourws_cli import cmd_analyze
-    from fourws_ros.launcher import run_graph
-    from fourws_sim.scenario import load_scenario
+    from fourws_ros.graph_run import run_graph
+    from fourws_run.config import RunConfig
+    from fourws_run.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
     out = args.out or Path("runs") / time.strftime("demo-%Y%m%dT%H%M%SZ", time.gmtime())
@@ -37,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     bags: list[str] = []
     failed: list[str] = []
     for law in scenario.laws:
-        result = run_graph(scenario, law, out, run_name=law)
+        result = run_graph(RunConfig.from_scenario(scenario, law), out, run_name=law)
         print("\n".join(result.summary_lines()), flush=True)
         if result.interrupted:
             return 130

@@ -1,21 +1,28 @@
-"""``fourws run [SCENARIO] [--law NAME ...] [--out DIR]``: run a scenario through the node graph.
+"""``fourws run [SCENARIO] [--law NAME ...] [--controller CMD] [--out DIR]``: run a scenario
+through the node graph.
 
-Every law of the scenario (or each ``--law``) is one run of the real ROS 2 graph — simulator,
-maneuver player, controller and recorder as separate processes on an isolated ROS domain —
-recorded to a rosbag2 (MCAP) bag. Prints a summary per run with the bag path; the exit code is
-non-zero if any run failed (the reason is printed).
+Every law of the scenario (or each ``--law``) is one run of the real ROS 2 graph -- simulator,
+maneuver player, controller and recorder as separate processes on a ROS domain of their own
+-- recorded to a rosbag2 (MCAP) bag that the recorder checks for completeness. With
+``--controller CMD`` (or a scenario's ``controller:``) your own controller node answers the
+states instead of fourws's (one run). Prints a summary per run; the run record is
+``<run>/run.json``.
+
+Exit code: 0 every run completed with a complete bag; 1 a run failed (a node, a stall, an
+incomplete recording -- the reason names it); 3 a run ended early for a vehicle-dynamics
+reason (the maneuver was aborted or the simulation diverged; its bag is complete); 130
+interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import shlex
 import sys
 from pathlib import Path
 
 HELP = "run a scenario (default: config/scenarios/default.yaml) through the ROS 2 node graph"
-
-EXIT_RUN_FAILED = 1
-EXIT_INTERRUPTED = 130
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -24,43 +31,71 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="scenario name (config/scenarios) or YAML path (default: default)")
     parser.add_argument("--law", action="append", metavar="NAME",
                         help="run only this law (repeatable; default: the scenario's laws)")
+    parser.add_argument("--controller", metavar="CMD", default=None,
+                        help="your own controller node instead of fourws's: an executable or "
+                             "'python my_controller.py' (quoted), started with the run's ROS "
+                             "environment and --ros-args; see docs/controller-contract.md")
+    parser.add_argument("--controller-name", metavar="NAME", default=None,
+                        help="ROS node name of --controller (default fourws_controller; the "
+                             "launcher remaps the node to it)")
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
                         help="output folder (default: the scenario's recording.output_dir)")
+    parser.add_argument("--name", default=None, metavar="RUN",
+                        help="run folder name (default <scenario>-<law>-<UTC time>; with "
+                             "several laws, <RUN>-<law>)")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace a run folder of the same name")
     parser.add_argument("--clock", choices=("lockstep", "realtime"), default=None,
                         help="override the scenario's clock mode")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the scenario; returns the exit code."""
-    import dataclasses
-
-    from fourws_ros.launcher import run_graph
-    from fourws_sim.errors import UnknownNameError
-    from fourws_sim.scenario import load_scenario
+    from fourws_control import available_laws
+    from fourws_ros.graph_run import run_graph
+    from fourws_run.config import USER_LAW, ControllerSpec, RunConfig
+    from fourws_run.record import EXIT_CODES, Outcome
+    from fourws_run.scenario import load_scenario
+    from fourws_sim.errors import ParameterError, UnknownNameError
 
     scenario = load_scenario(args.scenario)
     if args.clock:
         scenario = dataclasses.replace(scenario, clock_mode=args.clock)
-    laws = list(args.law) if args.law else list(scenario.laws)
-    from fourws_control import available_laws
-    for law in laws:
-        if law not in available_laws():
-            raise UnknownNameError("law", law, available_laws())
+    controller = scenario.controller
+    if args.controller is not None:
+        command = tuple(shlex.split(args.controller))
+        if not command:
+            raise ParameterError("--controller", "must be a command")
+        controller = ControllerSpec(command, controller.node_name)
+    if args.controller_name is not None:
+        controller = ControllerSpec.from_mapping({"command": list(controller.command),
+                                                  "name": args.controller_name},
+                                                 "--controller-name")
+    if not controller.builtin:
+        if args.law:
+            raise ParameterError("--law", "a user controller (--controller) runs its own law; "
+                                 "leave --law out")
+        laws = [USER_LAW]
+    else:
+        laws = list(args.law) if args.law else list(scenario.laws)
+        for law in laws:
+            if law not in available_laws():
+                raise UnknownNameError("law", law, available_laws())
     out = args.out if args.out is not None else Path(scenario.recording.output_dir)
-    results = []
+    records = []
     for law in laws:
-        result = run_graph(scenario, law, out)
-        results.append(result)
-        print("\n".join(result.summary_lines()), flush=True)
-        if result.interrupted:
-            return EXIT_INTERRUPTED
-    failed = [r for r in results if not r.ok]
-    print(f"fourws run: {len(results) - len(failed)}/{len(results)} runs ok; bags:")
-    for r in results:
+        config = RunConfig.from_scenario(scenario, law, controller)
+        name = args.name if args.name is None or len(laws) == 1 else f"{args.name}-{law}"
+        record = run_graph(config, out, run_name=name, overwrite=args.overwrite)
+        records.append(record)
+        print("\n".join(record.summary_lines()), flush=True)
+        if record.interrupted:
+            return EXIT_CODES[Outcome.INTERRUPTED]
+    bad = [r for r in records if not r.ok]
+    print(f"fourws run: {len(records) - len(bad)}/{len(records)} runs ok; bags:")
+    for r in records:
         print(f"  {r.law:>12s}  {r.bag_path if r.bag_path else '(not recorded)'}"
-              f"{'' if r.ok else '  FAILED'}")
-    if failed:
-        for r in failed:
-            print(f"fourws run: {r.law} failed: {r.reason}", file=sys.stderr)
-        return EXIT_RUN_FAILED
-    return 0
+              f"{'' if r.ok else '  ' + r.outcome.value.upper()}")
+    for r in bad:
+        print(f"fourws run: {r.law} {r.outcome.value}: {r.reason}", file=sys.stderr)
+    return max((r.exit_code for r in records), default=0) if bad else 0

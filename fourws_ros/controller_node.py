@@ -7,7 +7,7 @@ tick, passed through the rear-steer actuator (angle and rate limits over one con
 Handshake (both clock modes): the command for state ``k`` is sent once both the state ``k``
 and the ``DriverInput`` stamped with the state's stamp have arrived — the law's feed-forward
 term uses the front angle the driver applies in this tick, as the offline runner
-(:func:`fourws_sim.closed_loop.run_closed_loop`) does. If no driver input of that tick arrives
+(:func:`fourws_run.closed_loop.run_closed_loop`) does. If no driver input of that tick arrives
 within ``driver_wait_s`` (wall clock), the latest driver input is used (realtime runs with a
 slow maneuver node) and the fallback is counted in the log.
 
@@ -28,6 +28,14 @@ angle_limit_rad, rate_limit_radps : float
     Actuator limits (0 = the vehicle file's ``actuators``).
 control_period_s : float
     Period over which the rate limit acts, s (the simulator's control period).
+integration_step_s, state_period_s, clock_mode
+    The run's step, the period of the states answered and the clock mode: states that do not
+    continue the simulator's sequence are refused (:class:`fourws_run.ticks.StateGate`).
+exit_when_done : bool
+    Exit once the simulator's final status arrived and everything published is delivered.
+
+The node publishes what it runs with on ``/fourws/node_config`` (law, options, belief,
+actuator limits), again after every accepted law change.
 """
 
 from __future__ import annotations
@@ -41,7 +49,8 @@ from typing import Any
 from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetParametersResult)
 from rclpy.node import Node
 
-from fourws_ros import cdr, conversions, topics
+from fourws_ros import cdr, conversions, reporting, topics
+from fourws_run.ticks import StateGate, law_input
 from fourws_sim.errors import FourwsError, ParameterError
 
 #: Longest rear-angle limit a parameter may set, rad (45 deg: beyond any rear-steer hardware).
@@ -67,8 +76,14 @@ class ControllerNode(Node):
             description="JSON mapping of law options"))
         self.declare_parameter("vehicle", "table_8_1", ParameterDescriptor(
             description="simulated vehicle (config/vehicles name or YAML path)", read_only=True))
+        self.declare_parameter("vehicle_json", "", ParameterDescriptor(
+            description="the simulated vehicle as a whole vehicle-file mapping in JSON "
+                        "(overrides vehicle when not empty)", read_only=True))
         self.declare_parameter("belief_vehicle", "", ParameterDescriptor(
             description="controller belief vehicle ('' = vehicle)"))
+        self.declare_parameter("belief_vehicle_json", "", ParameterDescriptor(
+            description="the belief as a whole vehicle-file mapping in JSON (overrides "
+                        "belief_vehicle and the scales when not empty)"))
         self.declare_parameter("belief_scale_front", 1.0, ParameterDescriptor(
             description="belief front cornering stiffness scale, 1",
             floating_point_range=_float_range(0.05, 20.0)))
@@ -88,17 +103,37 @@ class ControllerNode(Node):
             description="wall time to wait for the driver input of a tick before using the "
                         "latest, s (0 = wait forever: lockstep)",
             floating_point_range=_float_range(0.0, 10.0)))
+        self.declare_parameter("integration_step_s", 1e-3, ParameterDescriptor(
+            description="the run's integration step, s", read_only=True,
+            floating_point_range=_float_range(1e-5, 1.0)))
+        self.declare_parameter("state_period_s", 0.01, ParameterDescriptor(
+            description="period of the answered states, s (lockstep: the control period)",
+            read_only=True, floating_point_range=_float_range(1e-5, 1.0)))
+        self.declare_parameter("clock_mode", "lockstep", ParameterDescriptor(
+            description="lockstep | realtime", read_only=True))
+        self.declare_parameter("exit_when_done", True, ParameterDescriptor(
+            description="exit once the simulator's final status arrived and all is delivered"))
 
-        from fourws_sim.params import load_vehicle
-        self.vehicle = load_vehicle(str(self.get_parameter("vehicle").value))
+        self.vehicle = conversions.vehicle_from_params(self)
         self.dt_s = float(self.get_parameter("control_period_s").value)
         current = {p: self.get_parameter(p).value for p in self._BUILD_PARAMS}
         self.law, self.actuator = self._build(current, None)
         self.law_name = current["law"]
         self.add_on_set_parameters_callback(self._on_set)
 
-        self.pub = self.create_publisher(topics.message_class(topics.REAR_STEER_CMD),
-                                         topics.REAR_STEER_CMD, topics.STREAM_QOS)
+        mode = str(self.get_parameter("clock_mode").value)
+        if mode not in ("lockstep", "realtime"):
+            raise ParameterError("clock_mode", f"must be lockstep or realtime, got {mode!r}")
+        self.gate = StateGate(float(self.get_parameter("integration_step_s").value),
+                              float(self.get_parameter("state_period_s").value),
+                              lockstep=mode == "lockstep")
+        self.counts = reporting.PublishCounts()
+        self.pub = self.counts.publisher(self, topics.REAR_STEER_CMD)
+        self._config_pub = self.counts.publisher(self, topics.NODE_CONFIG)
+        self._publish_config()
+        self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
+                                 self._on_sim_status, topics.STATUS_QOS)
+        self.finished = False  # run_node: stop spinning
         # raw subscriptions + fourws_ros.cdr: the answer chain of lockstep runs stays short
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                  self._on_state, topics.STREAM_QOS, raw=True)
@@ -113,13 +148,14 @@ class ControllerNode(Node):
         self._timer = self.create_timer(0.05, self._check_wait)
         self.get_logger().info(f"law {self.law_name} on {self.vehicle.name}")
 
-    _BUILD_PARAMS = ("law", "law_options_json", "belief_vehicle", "belief_scale_front",
-                     "belief_scale_rear", "angle_limit_rad", "rate_limit_radps")
+    _BUILD_PARAMS = ("law", "law_options_json", "belief_vehicle", "belief_vehicle_json",
+                     "belief_scale_front", "belief_scale_rear", "angle_limit_rad",
+                     "rate_limit_radps")
 
     def _build(self, values: dict[str, Any], keep_angle: float | None) -> tuple[Any, Any]:
         """Law and actuator from parameter values; raises FourwsError on bad values."""
         from fourws_control import RearSteerActuator, make_law
-        from fourws_sim.params import load_vehicle
+        from fourws_sim.params import load_vehicle, vehicle_from_mapping
 
         try:
             options = json.loads(values["law_options_json"] or "{}")
@@ -127,11 +163,18 @@ class ControllerNode(Node):
             raise ParameterError("law_options_json", f"not JSON ({exc})") from None
         if not isinstance(options, dict):
             raise ParameterError("law_options_json", "must be a JSON object")
-        belief = (load_vehicle(values["belief_vehicle"]) if values["belief_vehicle"]
-                  else self.vehicle)
-        sf, sr = float(values["belief_scale_front"]), float(values["belief_scale_rear"])
-        if sf != 1.0 or sr != 1.0:
-            belief = belief.with_axle_tires(sf, sr)
+        if values["belief_vehicle_json"]:
+            try:
+                data = json.loads(values["belief_vehicle_json"])
+            except json.JSONDecodeError as exc:
+                raise ParameterError("belief_vehicle_json", f"not JSON ({exc})") from None
+            belief = vehicle_from_mapping(data, "parameter belief_vehicle_json")
+        else:
+            belief = (load_vehicle(values["belief_vehicle"]) if values["belief_vehicle"]
+                      else self.vehicle)
+            sf, sr = float(values["belief_scale_front"]), float(values["belief_scale_rear"])
+            if sf != 1.0 or sr != 1.0:
+                belief = belief.with_axle_tires(sf, sr)
         law = make_law(str(values["law"]), belief, **options)
         law.gains(max(self.vehicle_speed_hint(), 1.0))  # fail now on a law that cannot design
         limits: dict[str, float] = {}
@@ -140,7 +183,7 @@ class ControllerNode(Node):
         if values["rate_limit_radps"] > 0.0:
             limits["rate_limit_rad_per_s"] = float(values["rate_limit_radps"])
         # the actuator model's limits come from the vehicle the controller is given (its
-        # belief), as in fourws_sim.closed_loop
+        # belief), as in fourws_run.closed_loop
         actuator = RearSteerActuator(belief, **limits,
                                      initial_angle_rad=keep_angle or 0.0)
         return law, actuator
@@ -162,16 +205,54 @@ class ControllerNode(Node):
             self.get_logger().warning(f"rejected parameter change: {exc}")
             return SetParametersResult(successful=False, reason=str(exc))
         self.law, self.actuator, self.law_name = law, actuator, str(values["law"])
+        self._values = values
         self.get_logger().info(f"now running law {self.law_name}")
+        if hasattr(self, "_config_pub"):
+            self._publish_config()
         return SetParametersResult(successful=True)
+
+    def _publish_config(self) -> None:
+        """What this controller runs with, on ``/fourws/node_config`` (latched)."""
+        import json
+
+        values = getattr(self, "_values", None) or {
+            p: self.get_parameter(p).value for p in self._BUILD_PARAMS}
+        msg = topics.message_class(topics.NODE_CONFIG)()
+        msg.data = json.dumps({"node": self.get_name(), "role": topics.Role.CONTROLLER.value,
+                               "config": {
+                                   "law": self.law_name,
+                                   "law_options": json.loads(values["law_options_json"]
+                                                             or "{}"),
+                                   "vehicle": self.vehicle.name,
+                                   "belief_vehicle": self.law.vehicle.to_dict(),
+                                   "belief_scale_front": float(values["belief_scale_front"]),
+                                   "belief_scale_rear": float(values["belief_scale_rear"]),
+                                   "angle_limit_rad": self.actuator.angle_limit_rad,
+                                   "rate_limit_radps": self.actuator.rate_limit_rad_per_s,
+                                   "control_period_s": self.dt_s}}, sort_keys=True)
+        self._config_pub.publish(msg)
+
+    def _on_sim_status(self, msg: Any) -> None:
+        if msg.final and bool(self.get_parameter("exit_when_done").value):
+            self.get_logger().info(f"simulation ended ({msg.end_reason}); stopping")
+            self.finished = True
+
+    def on_shutdown(self, _executor: Any) -> None:
+        """Wait until every subscriber has what this node published."""
+        reporting.wait_delivered(self.counts, self.get_logger())
 
     # ------------------------------------------------------------------ handshake
     def _on_state(self, raw: bytes) -> None:
         try:
-            self._state = cdr.parse_state(raw)
+            state = cdr.parse_state(raw)
         except cdr.CdrError as exc:
             self.get_logger().error(f"ignored state: {exc}", throttle_duration_sec=1.0)
             return
+        if not self.gate.admit(state["step"], state["sim_time_s"], state["stamp_ns"]):
+            self.get_logger().warning(f"refused a state: {self.gate.rejections.last}",
+                                      throttle_duration_sec=1.0)
+            return
+        self._state = state
         self._state_rx = time.monotonic()
         self._try_answer(fallback=False)
 
@@ -184,6 +265,10 @@ class ControllerNode(Node):
         if not math.isfinite(cmd.front_wheel_angle_rad):
             self.get_logger().error("ignored driver input: front_wheel_angle_rad is not finite",
                                     throttle_duration_sec=1.0)
+            return
+        if key in self._driver:
+            self.get_logger().warning("refused a second driver input for one state",
+                                      throttle_duration_sec=1.0)
             return
         self._driver[key] = cmd.front_wheel_angle_rad
         self._last_front = cmd.front_wheel_angle_rad
@@ -215,7 +300,7 @@ class ControllerNode(Node):
             del self._driver[old]
         self._state = None
         try:
-            law_cmd = self.law.rear_angle(conversions.law_input_from_outputs(state, front))
+            law_cmd = self.law.rear_angle(law_input(state, front))
             angle = self.actuator.apply(law_cmd, self.dt_s)
             self.pub.publish(self._cmd_encoder.encode(angle, 0.0, self.law_name, key,
                                                       state["step"]))

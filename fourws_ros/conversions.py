@@ -8,7 +8,7 @@ Core side: ``Simulator.outputs()`` mappings (keys = the fields of ``VehicleState
 Times: a simulation time ``t`` in s becomes a ``builtin_interfaces/Time`` rounded to the
 nanosecond; ``VehicleState.sim_time_s`` carries the exact float so nodes that answer a state
 (maneuver, controller) compute with the very number the simulator (and the offline runner)
-used — lockstep runs are then bit-identical to :func:`fourws_sim.closed_loop.run_closed_loop`.
+used — lockstep runs are then bit-identical to :func:`fourws_run.closed_loop.run_closed_loop`.
 """
 
 from __future__ import annotations
@@ -18,28 +18,37 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, N_WHEELS, NS_PER_S, STATE_SCALARS,
+                                  STATE_WHEELS, time_to_ns)
 from fourws_sim.errors import NonFiniteError
 
-NS_PER_S = 1_000_000_000
-#: Number of wheels (FL, FR, RL, RR).
-N_WHEELS = 4
+# ---------------------------------------------------------------------------- parameters
+def vehicle_from_params(node: Any, name_param: str = "vehicle",
+                        json_param: str = "vehicle_json") -> Any:
+    """The vehicle a node's parameters name: the mapping in ``json_param`` (the launcher's,
+    a whole vehicle file as JSON) if not empty, else the file ``name_param`` names.
 
-#: Scalar float fields of VehicleState filled from ``Simulator.outputs()``.
-STATE_SCALARS = ("x_m", "y_m", "heading_rad", "speed_mps", "lateral_velocity_mps",
-                 "yaw_rate_radps", "roll_rad", "roll_rate_radps", "sideslip_rad",
-                 "longitudinal_accel_mps2", "lateral_accel_mps2", "front_wheel_angle_rad",
-                 "rear_wheel_angle_rad")
-#: Per-wheel (length-4) fields of VehicleState.
-STATE_WHEELS = ("wheel_speed_radps", "normal_load_n", "slip_angle_rad", "slip_ratio", "fx_n",
-                "fy_n", "mz_nm")
+    Raises
+    ------
+    fourws_sim.errors.ParameterError
+        Bad JSON or an invalid vehicle (names the parameter).
+    """
+    import json
+
+    from fourws_sim.errors import ParameterError
+    from fourws_sim.params import load_vehicle, vehicle_from_mapping
+
+    text = str(node.get_parameter(json_param).value)
+    if not text:
+        return load_vehicle(str(node.get_parameter(name_param).value))
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ParameterError(json_param, f"not JSON ({exc})") from None
+    return vehicle_from_mapping(data, f"parameter {json_param}")
 
 
 # ---------------------------------------------------------------------------- time
-def time_to_ns(time_s: float) -> int:
-    """Simulation time in s -> integer ns (rounded)."""
-    return int(round(float(time_s) * NS_PER_S))
-
-
 def set_stamp(stamp: Any, time_s: float) -> Any:
     """Fill a ``builtin_interfaces/Time`` with ``time_s`` (s, >= 0); returns it."""
     ns = time_to_ns(time_s)
@@ -93,8 +102,6 @@ def state_msg(outputs: Mapping[str, Any], *, time_s: float, step: int, model: st
     """
     from fourws_msgs.msg import VehicleState
 
-    from fourws_ros.topics import FRAME_BODY
-
     bad = outputs_finite(outputs)
     if bad:
         raise NonFiniteError(f"state field {bad} is not finite at t = {time_s} s")
@@ -123,38 +130,6 @@ def state_to_outputs(msg: Any) -> dict[str, Any]:
     return out
 
 
-def law_input_from_outputs(outputs: Any, delta_f_rad: float) -> Any:
-    """:class:`fourws_control.LawInput` from an outputs mapping (or
-    :func:`fourws_ros.cdr.parse_state` result) and the driver's front angle of the tick —
-    the same values, in the same fields, as :func:`fourws_sim.closed_loop.law_input_from`."""
-    from fourws_control import LawInput
-
-    return LawInput(delta_f_rad=float(delta_f_rad), speed_mps=float(outputs["speed_mps"]),
-                    yaw_rate_radps=float(outputs["yaw_rate_radps"]),
-                    roll_rad=float(outputs["roll_rad"]),
-                    roll_rate_radps=float(outputs["roll_rate_radps"]),
-                    lateral_velocity_mps=float(outputs["lateral_velocity_mps"]),
-                    time_s=float(outputs["sim_time_s"]))
-
-
-def law_input(msg: Any, delta_f_rad: float | None = None) -> Any:
-    """:class:`fourws_control.LawInput` from a ``VehicleState``.
-
-    Parameters
-    ----------
-    msg : VehicleState
-    delta_f_rad : float, optional
-        Front road-wheel angle the law should see (default: the applied angle in the state).
-    """
-    from fourws_control import LawInput
-
-    return LawInput(
-        delta_f_rad=float(msg.front_wheel_angle_rad if delta_f_rad is None else delta_f_rad),
-        speed_mps=float(msg.speed_mps), yaw_rate_radps=float(msg.yaw_rate_radps),
-        roll_rad=float(msg.roll_rad), roll_rate_radps=float(msg.roll_rate_radps),
-        lateral_velocity_mps=float(msg.lateral_velocity_mps), time_s=float(msg.sim_time_s))
-
-
 # ---------------------------------------------------------------------------- driver input
 def driver_msg(cmd: Any, time_s: float, msg: Any = None) -> Any:
     """``DriverInput`` from a :class:`fourws_sim.drivers.DriverCommand` at ``time_s``."""
@@ -167,7 +142,7 @@ def driver_msg(cmd: Any, time_s: float, msg: Any = None) -> Any:
         check_finite_mapping(values, "driver input")
     m = DriverInput() if msg is None else msg
     set_stamp(m.header.stamp, time_s)
-    m.header.frame_id = "base_link"
+    m.header.frame_id = FRAME_BODY
     m.steering_wheel_angle_rad = float(values["steering_wheel_angle_rad"])
     m.front_wheel_angle_rad = float(values["front_wheel_angle_rad"])
     m.steering_torque_nm = float(values["steering_torque_nm"])
@@ -220,7 +195,7 @@ def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state_stamp_ns: 
                              f"(angle {angle_rad!r}, rate {rate_radps!r})")
     m = RearSteerCommand() if msg is None else msg
     m.header.stamp.sec, m.header.stamp.nanosec = divmod(int(state_stamp_ns), NS_PER_S)
-    m.header.frame_id = "base_link"
+    m.header.frame_id = FRAME_BODY
     m.angle_rad = float(angle_rad)
     m.rate_radps = float(rate_radps)
     m.law = law
@@ -247,8 +222,6 @@ def odometry_msg(state: Any, msg: Any = None) -> Any:
     """
     from nav_msgs.msg import Odometry
 
-    from fourws_ros.topics import FRAME_BODY, FRAME_ODOM
-
     m = Odometry() if msg is None else msg
     m.header.stamp = state.header.stamp
     m.header.frame_id = FRAME_ODOM
@@ -273,8 +246,6 @@ def imu_msg(state: Any, msg: Any = None) -> Any:
     """
     from fourws_sim.params import GRAVITY_MPS2
     from sensor_msgs.msg import Imu
-
-    from fourws_ros.topics import FRAME_BODY
 
     m = Imu() if msg is None else msg
     m.header.stamp = state.header.stamp

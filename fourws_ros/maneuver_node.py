@@ -1,10 +1,14 @@
 """Maneuver node: plays a maneuver of ``config/maneuvers`` as driver input, one per state.
 
-For every ``VehicleState`` it receives (at the control rate) it calls the core maneuver
-(:class:`fourws_sim.maneuvers.Maneuver`) with the state's exact simulation time and outputs and
-publishes the ``DriverInput`` stamped with the state's stamp — the answer the simulator waits
-for in lockstep mode. It publishes ``ManeuverStatus`` (phase, progress, events) and, once the
-maneuver is done, a status with ``done = true`` and stops answering, which ends the run.
+For every ``VehicleState`` of the run (states that do not continue the simulator's own
+sequence are refused and counted, :class:`fourws_run.ticks.StateGate`) it calls the core
+maneuver (:class:`fourws_sim.maneuvers.Maneuver`) with the state's exact simulation time and
+outputs and publishes the ``DriverInput`` stamped with the state's stamp -- the answer the
+simulator waits for in lockstep mode. It publishes ``ManeuverStatus`` (phase, progress,
+events, its published counts) and, once the maneuver is done, a final status with
+``done = true`` stamped with that state's stamp (``end``: ``completed``, ``end_condition`` or
+``aborted``) instead of an answer, which ends the run. Then it waits until every subscriber
+has everything it published and exits (``exit_when_done``).
 
 Parameters (ROS)
 ----------------
@@ -14,6 +18,13 @@ maneuver_json : str
     Inline maneuver mapping as JSON (overrides ``maneuver`` when not empty); read-only.
 vehicle : str
     Simulated vehicle (name or YAML path); read-only.
+integration_step_s, state_period_s : float
+    The run's integration step and the period of the states it answers (lockstep: the
+    control period); the state gate checks the states against them.
+clock_mode : str
+    ``lockstep`` (every state answered, none skipped) or ``realtime``.
+exit_when_done : bool
+    Exit once the maneuver is done and delivered.
 """
 
 from __future__ import annotations
@@ -22,15 +33,16 @@ import json
 import sys
 from typing import Any
 
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 
-from fourws_ros import cdr, conversions, topics
+from fourws_ros import cdr, conversions, reporting, topics
+from fourws_run.ticks import StateGate
 from fourws_sim.errors import FourwsError, ParameterError
-
 
 #: Progress status every this many integration steps (0.1 s at 1 kHz), besides phase events.
 STATUS_EVERY_STEPS = 100
+CLOCK_MODES = ("lockstep", "realtime")
 
 
 class ManeuverNode(Node):
@@ -39,16 +51,28 @@ class ManeuverNode(Node):
     def __init__(self) -> None:
         super().__init__("fourws_maneuver")
         from fourws_sim.maneuvers import make_maneuver
-        from fourws_sim.params import load_vehicle
 
         ro = dict(read_only=True)
+        period = [FloatingPointRange(from_value=1e-5, to_value=1.0)]
         self.declare_parameter("maneuver", "step_steer_85kmh", ParameterDescriptor(
             description="maneuver name (config/maneuvers) or YAML path", **ro))
         self.declare_parameter("maneuver_json", "", ParameterDescriptor(
             description="inline maneuver mapping as JSON (overrides maneuver)", **ro))
         self.declare_parameter("vehicle", "table_8_1", ParameterDescriptor(
             description="simulated vehicle (config/vehicles name or YAML path)", **ro))
-        vehicle = load_vehicle(str(self.get_parameter("vehicle").value))
+        self.declare_parameter("vehicle_json", "", ParameterDescriptor(
+            description="the simulated vehicle as a whole vehicle-file mapping in JSON "
+                        "(overrides vehicle when not empty)", **ro))
+        self.declare_parameter("integration_step_s", 1e-3, ParameterDescriptor(
+            description="the run's integration step, s", floating_point_range=period, **ro))
+        self.declare_parameter("state_period_s", 0.01, ParameterDescriptor(
+            description="period of the answered states, s (lockstep: the control period)",
+            floating_point_range=period, **ro))
+        self.declare_parameter("clock_mode", "lockstep", ParameterDescriptor(
+            description="lockstep | realtime", **ro))
+        self.declare_parameter("exit_when_done", True, ParameterDescriptor(
+            description="exit once the maneuver is done and delivered"))
+        vehicle = conversions.vehicle_from_params(self)
         inline = str(self.get_parameter("maneuver_json").value)
         if inline:
             try:
@@ -58,60 +82,85 @@ class ManeuverNode(Node):
         else:
             source = str(self.get_parameter("maneuver").value)
         self.maneuver = make_maneuver(source, vehicle)
-        self.driver_pub = self.create_publisher(topics.message_class(topics.DRIVER_INPUT),
-                                                topics.DRIVER_INPUT, topics.STREAM_QOS)
-        self.status_pub = self.create_publisher(topics.message_class(topics.MANEUVER_STATUS),
-                                                topics.MANEUVER_STATUS, topics.STATUS_QOS)
+        mode = str(self.get_parameter("clock_mode").value)
+        if mode not in CLOCK_MODES:
+            raise ParameterError("clock_mode", f"must be one of {', '.join(CLOCK_MODES)}, "
+                                 f"got {mode!r}")
+        self.gate = StateGate(float(self.get_parameter("integration_step_s").value),
+                              float(self.get_parameter("state_period_s").value),
+                              lockstep=mode == "lockstep")
+        self.counts = reporting.PublishCounts()
+        self.driver_pub = self.counts.publisher(self, topics.DRIVER_INPUT)
+        self.status_pub = self.counts.publisher(self, topics.MANEUVER_STATUS)
+        self._config_pub = reporting.publish_node_config(
+            self, self.counts, topics.Role.MANEUVER,
+            {"maneuver": self.maneuver.to_dict(), "vehicle": vehicle.name})
         # raw: the fast decoder keeps the lockstep answer chain short (fourws_ros.cdr)
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                  self._on_state, topics.STREAM_QOS, raw=True)
         self._driver_encoder = cdr.DriverInputEncoder(topics.FRAME_BODY)
         self._phase = ""
-        self._done = False
+        self.done = False
+        self.finished = False  # run_node: stop spinning
         self.get_logger().info(f"maneuver {self.maneuver.name} "
                                f"({self.maneuver.spec.type}, {self.maneuver.duration_s} s)")
 
-    def _status(self, stamp_ns: int, phase: str, progress: float, done: bool,
-                event: str) -> None:
+    def _status(self, stamp_ns: int, phase: str, progress: float, event: str,
+                end: str = "") -> None:
         msg = topics.message_class(topics.MANEUVER_STATUS)()
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, conversions.NS_PER_S)
         msg.maneuver = self.maneuver.name
         msg.phase = phase
         msg.progress = float(progress)
-        msg.done = done
+        msg.done = bool(end)
+        msg.end = end
         msg.event = event
-        self.status_pub.publish(msg)
+        reporting.publish_counted_status(self.status_pub, msg, self.counts,
+                                         self.gate.rejections)
+
+    def _finish(self, stamp_ns: int, t: float, end: str, event: str) -> None:
+        self.done = True
+        self._status(stamp_ns, "done", self.maneuver.progress(t), event, end)
+        log = self.get_logger().info if end != "aborted" else self.get_logger().warning
+        log(f"maneuver {end} at t = {t:.3f} s: {event}")
+        if bool(self.get_parameter("exit_when_done").value):
+            self.finished = True
 
     def _on_state(self, raw: bytes) -> None:
-        if self._done:
+        if self.done:
             return
         try:
             outputs = cdr.parse_state(raw)
         except cdr.CdrError as exc:
-            self.get_logger().error(f"ignored state: {exc}", throttle_duration_sec=1.0)
+            self.gate.rejections.add(topics.STATE, "not a VehicleState", str(exc))
             return
         t = outputs["sim_time_s"]
         stamp = outputs["stamp_ns"]
+        if not self.gate.admit(outputs["step"], t, stamp):
+            self.get_logger().warning(f"refused a state: {self.gate.rejections.last}",
+                                      throttle_duration_sec=1.0)
+            return
         if self.maneuver.done(t, outputs):
-            self._done = True
             reason = self.maneuver.abort_reason
-            self._status(stamp, "done", self.maneuver.progress(t), True,
-                         f"done: {reason}" if reason else "done")
-            self.get_logger().info(f"maneuver done at t = {t:.3f} s {reason}")
+            self._finish(stamp, t, self.maneuver.end_kind,
+                         f"{self.maneuver.end_kind}: {reason}" if reason else "completed")
             return
         try:
             cmd = self.maneuver.command(t, outputs)
-            self.driver_pub.publish(self._driver_encoder.encode(cmd, t))
+            raw_cmd = self._driver_encoder.encode(cmd, t)
         except FourwsError as exc:
-            self._done = True
-            self._status(stamp, "done", self.maneuver.progress(t), True, f"abort: {exc}")
-            self.get_logger().error(f"maneuver aborted: {exc}")
+            self._finish(stamp, t, "aborted", f"aborted: {exc}")
             return
+        self.driver_pub.publish(raw_cmd)
         phase = self.maneuver.phase(t)
         event = f"phase {phase}" if phase != self._phase else ""
         if event or outputs["step"] % STATUS_EVERY_STEPS == 0:
-            self._status(stamp, phase, self.maneuver.progress(t), False, event)
+            self._status(stamp, phase, self.maneuver.progress(t), event)
         self._phase = phase
+
+    def on_shutdown(self, _executor: Any) -> None:
+        """Wait until every subscriber has what this node published."""
+        reporting.wait_delivered(self.counts, self.get_logger())
 
 
 def main(args: list[str] | None = None) -> int:

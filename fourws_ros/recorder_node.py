@@ -1,26 +1,43 @@
-"""Recorder node: writes every graph topic to a rosbag2 bag (MCAP storage).
+"""Recorder node: writes the run's topics to a rosbag2 bag (MCAP) and accounts for every message.
 
-The bag is written with :class:`fourws_analysis.bag.BagWriter` (rosbags), so the message
-definitions embedded in the bag come from the same typestore the offline analysis reads with.
-Messages arrive as raw CDR bytes (raw subscriptions) and are written untouched — nothing is
-deserialized on the recording path.
+What it stores
+--------------
+Only messages of the run's own publishers: for each topic the roles that may publish it are
+:data:`fourws_run.interface.WRITER_ROLES`, and the node name of each role is a parameter
+(``simulator_node``, ``maneuver_node``, ``controller_node``, ``launcher_node``). Every message
+arrives with its publisher's identity and publication sequence number (rclpy message info);
+the publisher is looked up in the ROS graph. A message from anyone else is not stored but
+counted as foreign (with the publishing node's name), so a rogue node on the run's domain
+cannot put data into the bag. Messages are written as the raw CDR bytes received, never
+deserialized; the publisher's sequence number is kept in each MCAP message record.
+
+Accounting and completeness
+---------------------------
+:class:`fourws_run.accounting.Ledger` keeps, per topic and publisher, what was stored and which
+sequence numbers never arrived; the simulator's and the maneuver's status messages bring their
+own published counts, the final ones when the run ends. The recorder publishes its progress
+and accounting on ``/fourws/recorder_status`` (the simulator's lockstep flow control reads the
+stored counts). Once the simulator's final status is in and every expected message is stored
+(``complete``), it writes the accounting into the bag (``metadata.yaml`` ``custom_data``
+``fourws.complete`` / ``fourws.accounting`` and an MCAP metadata record), closes the bag and
+exits (``close_when_complete``). On SIGINT/SIGTERM before that it drains what DDS still holds
+for ``drain_quiet_s``, closes the bag with the accounting it has (``fourws.complete: false``
+and what is missing) and exits with code 4.
 
 Bag timestamps
 --------------
 Each message is logged at its ``header.stamp`` (the clock's stamp for ``/clock``): simulation
-time, in both clock modes. A lockstep run is then recorded on its own time axis (the bag of a
-run 20x faster than real time still spans the simulated duration, and replays at rate 1 in
-real time); messages without a stamp (``/fourws/run_config``) take the latest stamp seen.
+time, in both clock modes; messages without a stamp (configurations) take the latest stamp
+seen.
 
 Durability
 ----------
-* SIGINT/SIGTERM: the recorder keeps taking messages until none has arrived for
-  ``drain_quiet_s`` (the launcher stops the simulator first, so the queues empty), then closes
-  the bag (metadata.yaml written, MCAP summary complete).
-* SIGKILL (or a power cut): every ``flush_period_s`` the open MCAP chunk is closed and the file
-  flushed to the OS, so the ``.mcap`` holds every message up to the last flush as complete
-  chunks. :func:`fourws_analysis.bag.load_bag` reads such a bag (no ``metadata.yaml``, no MCAP
-  summary) up to its last complete chunk. At most ``flush_period_s`` of messages is lost.
+The open MCAP chunk is closed and handed to the OS every ``flush_period_s`` of simulation time
+or of wall time, whichever comes first, and whenever it exceeds
+:data:`fourws_run.bagfile.CHUNK_BYTES`; a recorder killed later leaves every message up to the
+last flush in complete, CRC-checked chunks (``fourws bag repair`` rebuilds the bag). In
+lockstep the simulator cannot run further than the flow-control window ahead, so a killed
+recorder loses at most that window plus one flush period of data.
 """
 
 from __future__ import annotations
@@ -29,30 +46,36 @@ import struct
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
-from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, ParameterType,
-                                SetParametersResult)
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rclpy.node import Node
 
 from fourws_ros import topics
+from fourws_ros.identity import PublisherNames, publisher_gid
+from fourws_run.accounting import Ledger
+from fourws_run.bagfile import BagError, BagWriter
 from fourws_sim.errors import ParameterError
 
-#: Topics recorded by default: the whole graph (``/clock`` duplicates the state stamps).
-DEFAULT_TOPICS = [t for t in topics.TOPIC_TYPES
-                  if t not in (topics.CLOCK, topics.RECORDER_PROGRESS)]
-#: The recorder reports its progress (for lockstep flow control) every this many states.
-PROGRESS_EVERY = 20
+#: The recorder reports its progress at least every this many messages taken (and after a
+#: batch, and on a timer).
+STATUS_EVERY = 20
+#: Wall period of the recorder status and the pending-publisher lookups, s.
+STATUS_PERIOD_S = 0.1
+#: A publisher the ROS graph cannot name within this wall time is foreign, s.
+UNIDENTIFIED_AFTER_S = 5.0
+#: Messages kept while their publisher is being identified (per publisher).
+MAX_PENDING = 20000
 
 _NS_PER_S = 1_000_000_000
-#: Upper bound of the shutdown drain, s (a publisher that never stops cannot hold us forever).
-MAX_DRAIN_S = 30.0
 #: CDR encapsulation header (2 bytes kind + 2 bytes options) before the payload.
 _CDR_HEADER_BYTES = 4
 #: Encapsulation kinds of plain CDR (big/little endian); byte 1 is 1 for little endian.
 _CDR_LITTLE_ENDIAN = 1
 _STAMP_LE = struct.Struct("<iI")
 _STAMP_BE = struct.Struct(">iI")
+#: Topics whose status messages carry a publisher's counts.
+_REPORT_TOPICS = (topics.SIM_STATUS, topics.MANEUVER_STATUS)
 
 
 def stamp_ns(data: bytes | memoryview) -> int | None:
@@ -73,25 +96,8 @@ def stamp_ns(data: bytes | memoryview) -> int | None:
     return sec * _NS_PER_S + nanosec
 
 
-def flush_bag(bag: Any) -> bool:
-    """Close the open MCAP chunk of a :class:`~fourws_analysis.bag.BagWriter` and flush the file.
-
-    Relies on the storage object of rosbags' writer (``close_chunk()``, ``chunk``, ``bio``;
-    rosbags 0.11). Returns ``False`` (and does nothing) if that layout is not found, so a
-    rosbags upgrade degrades SIGKILL durability instead of breaking recording.
-    """
-    storage = getattr(getattr(bag, "_writer", None), "storage", None)
-    chunk = getattr(storage, "chunk", None)
-    if storage is None or chunk is None or not hasattr(storage, "close_chunk"):
-        return False
-    if chunk.bio.tell():
-        storage.close_chunk()
-    storage.bio.flush()
-    return True
-
-
 class RecorderNode(Node):
-    """Records the graph topics to ``bag_path`` (see module docstring).
+    """Records and accounts for the run's topics (see module docstring).
 
     Parameters (ROS)
     ----------------
@@ -99,107 +105,266 @@ class RecorderNode(Node):
         Bag directory to create (must not exist). Read-only.
     topics : list of str
         Topics to record (default: every graph topic but ``/clock``). Read-only.
+    simulator_node, maneuver_node, controller_node, launcher_node : str
+        ROS node name of each role (who may publish what).
     flush_period_s : float
-        Wall-clock period of chunk flushes (SIGKILL durability), s.
+        Simulation- and wall-time period of chunk flushes (SIGKILL loses at most this), s.
     drain_quiet_s : float
-        On shutdown, stop once no message arrived for this long, s.
+        On SIGINT/SIGTERM: stop draining once no message arrived for this long, s.
+    close_when_complete : bool
+        Close the bag and exit once the run ended and every message is stored.
     """
+
+    #: run_node: this node needs message info (publisher identity), so it spins with rclpy's
+    #: single-threaded executor (the events executor does not deliver it).
+    needs_message_info = True
 
     def __init__(self) -> None:
         super().__init__("fourws_recorder")
-        from fourws_analysis.bag import BagWriter
-
         ro = dict(read_only=True)
         self.declare_parameter("bag_path", "", ParameterDescriptor(
             description="bag directory to create (rosbag2, MCAP storage)", **ro))
-        self.declare_parameter("topics", DEFAULT_TOPICS, ParameterDescriptor(
+        self.declare_parameter("topics", list(topics.RECORDED_TOPICS), ParameterDescriptor(
             type=ParameterType.PARAMETER_STRING_ARRAY,
-            description="topics to record (graph topics of fourws_ros.topics)", **ro))
+            description="topics to record (graph topics of fourws_run.interface)", **ro))
+        for role in (topics.Role.SIMULATOR, topics.Role.MANEUVER, topics.Role.CONTROLLER,
+                     topics.Role.LAUNCHER):
+            self.declare_parameter(f"{role.value}_node", topics.NODE_NAMES[role],
+                                   ParameterDescriptor(
+                                       description=f"ROS node name of the run's {role.value}",
+                                       **ro))
         self.declare_parameter("flush_period_s", 0.5, ParameterDescriptor(
-            description="wall-clock period of MCAP chunk flushes, s (SIGKILL loses at most "
-                        "this much)",
-            floating_point_range=[FloatingPointRange(from_value=0.05, to_value=60.0)]))
+            description="simulation- and wall-time period of MCAP chunk flushes, s (a killed "
+                        "recorder loses at most this)",
+            floating_point_range=[FloatingPointRange(from_value=0.01, to_value=60.0)], **ro))
         self.declare_parameter("drain_quiet_s", 0.3, ParameterDescriptor(
-            description="on shutdown: stop when no message arrived for this long, s",
+            description="on SIGINT/SIGTERM: stop draining once no message arrived for this "
+                        "long, s",
             floating_point_range=[FloatingPointRange(from_value=0.01, to_value=10.0)]))
-        self.add_on_set_parameters_callback(self._on_set)
+        self.declare_parameter("close_when_complete", True, ParameterDescriptor(
+            description="close the bag and exit once the run ended and every message is "
+                        "stored"))
 
         path = str(self.get_parameter("bag_path").value)
         if not path:
             raise ParameterError("bag_path", "must name the bag directory to create")
-        wanted = list(self.get_parameter("topics").value)
+        wanted = list(dict.fromkeys(self.get_parameter("topics").value))
         unknown = [t for t in wanted if t not in topics.TOPIC_TYPES]
         if unknown:
             raise ParameterError("topics", f"unknown topic {unknown[0]!r}; valid: "
-                                 f"{', '.join(topics.TOPIC_TYPES)}")
-        self.bag = BagWriter(Path(path))
-        self.bag.open()
-        self.counts: dict[str, int] = {t: 0 for t in wanted}
+                                 f"{', '.join(topics.RECORDED_TOPICS)}")
+        if topics.RECORDER_STATUS in wanted:
+            raise ParameterError("topics", f"{topics.RECORDER_STATUS} is the recorder's own")
+        writers = {role: str(self.get_parameter(f"{role.value}_node").value)
+                   for role in (topics.Role.SIMULATOR, topics.Role.MANEUVER,
+                                topics.Role.CONTROLLER, topics.Role.LAUNCHER)}
+        try:
+            self.bag = BagWriter(Path(path)).open()
+        except BagError as exc:
+            raise ParameterError("bag_path", str(exc)) from None
+        self.recorded = wanted
+        self.ledger = Ledger(wanted, writers)
+        self.closed = False
+        self.finished = False  # run_node: stop spinning
+        self.stop_reason = ""
+        self._flush_ns = int(float(self.get_parameter("flush_period_s").value) * _NS_PER_S)
+        self._flush_wall_s = float(self.get_parameter("flush_period_s").value)
+        self._flushed_ns = 0
+        self._flushed_wall = time.monotonic()
         self._last_stamp_ns = 0
         self._last_rx = time.monotonic()
-        self._progress_pub = self.create_publisher(
-            topics.message_class(topics.RECORDER_PROGRESS), topics.RECORDER_PROGRESS,
+        self._names = PublisherNames(self)
+        self._pending: dict[bytes, tuple[float, list[tuple[str, bytes, int]]]] = {}
+        self._status_due = False
+        self._unreported = 0
+        self._status_pub = self.create_publisher(
+            topics.message_class(topics.RECORDER_STATUS), topics.RECORDER_STATUS,
             topics.STATUS_QOS)
-        self._progress_msg = topics.message_class(topics.RECORDER_PROGRESS)()
-        self._subs = [
-            self.create_subscription(topics.message_class(t), t, self._make_callback(t),
-                                     topics.TOPIC_QOS[t], raw=True)
-            for t in wanted]
-        self._flush_timer = self.create_timer(
-            float(self.get_parameter("flush_period_s").value), self._flush,
-            clock=self._wall_clock())
+        self._status_msg = topics.message_class(topics.RECORDER_STATUS)()
+        self._status_msg.bag_path = str(self.bag.path)
+        self._status_msg.topics = list(wanted)
+        subscribed = list(wanted) + [t for t in _REPORT_TOPICS if t not in wanted]
+        self._subs: dict[str, Any] = {}
+        for t in subscribed:
+            self._subs[t] = self.create_subscription(
+                topics.message_class(t), t, self._make_callback(t),
+                topics.LATCHED_RECORD_QOS if t in topics.LATCHED_TOPICS else topics.TOPIC_QOS[t],
+                raw=True)
+        self._timer = self.create_timer(STATUS_PERIOD_S, self._tick, clock=_steady_clock())
+        self._names.refresh(*self._subs)
         self.get_logger().info(f"recording {len(wanted)} topics to {path}")
+        self._publish_status()
 
-    def _wall_clock(self) -> Any:
-        from rclpy.clock import Clock, ClockType
-        return Clock(clock_type=ClockType.STEADY_TIME)
+    # ------------------------------------------------------------------ messages
+    def _make_callback(self, topic: str) -> Callable[[bytes, Any], None]:
+        msgtype = topics.message_class(topic)
 
-    def _on_set(self, params: list[Any]) -> SetParametersResult:
-        for p in params:
-            if p.name in ("flush_period_s", "drain_quiet_s"):
-                value = p.value
-                if not isinstance(value, float) or not value > 0.0:
-                    return SetParametersResult(successful=False,
-                                               reason=f"{p.name}: must be a float > 0 s")
-        return SetParametersResult(successful=True)
+        def receive(data: bytes, info: Any) -> None:
+            gid = publisher_gid(info)
+            seq = info.get("publication_sequence_number") or 0
+            # a publisher with messages waiting to be identified keeps its order: behind them
+            node = None if gid in self._pending else self._names.name(topic, gid)
+            if node is None:
+                self._hold(gid, topic, data, seq)
+            else:
+                self._take(topic, node, data, seq)
 
-    def _make_callback(self, topic: str) -> Any:
-        msgtype = topics.TOPIC_TYPES[topic]
-        write = self.bag.write_raw
-        counts = self.counts
-
-        def callback(data: bytes) -> None:
-            t_ns = stamp_ns(data) if topic != topics.RUN_CONFIG else None
-            if t_ns is None:
-                t_ns = self._last_stamp_ns
-            elif t_ns > self._last_stamp_ns:
-                self._last_stamp_ns = t_ns
-            write(topic, data, t_ns, msgtype)
-            counts[topic] += 1
+        def callback(data: bytes, info: Any) -> None:
+            # The executor hands over one message per wake-up, which costs far more than
+            # storing it. Take the rest of this topic's queue here, so a recorder that fell
+            # behind catches up at the speed of writing, not of the executor.
             self._last_rx = time.monotonic()
-            if topic == topics.STATE and counts[topic] % PROGRESS_EVERY == 0:
-                self._progress_msg.data = counts[topic]
-                self._progress_pub.publish(self._progress_msg)
+            receive(data, info)
+            handle = self._subs[topic].handle
+            taken_n = 1
+            for taken_n in range(2, topics.STREAM_DEPTH + 2):
+                with handle:
+                    taken = handle.take_message(msgtype, True)
+                if taken is None:
+                    break
+                receive(*taken)
+            # report often enough that the simulator's flow window never waits on a report:
+            # after a batch (the recorder was behind) or every STATUS_EVERY messages
+            self._unreported += taken_n - 1
+            if taken_n > 2 or self._unreported >= STATUS_EVERY:
+                self._publish_status()
 
         return callback
 
+    def _take(self, topic: str, node: str, data: bytes, seq: int) -> None:
+        if topic in _REPORT_TOPICS and self.ledger.is_legit(topic, node):
+            self._read_report(topic, node, data)
+        if topic not in self.ledger.topics:
+            return  # subscribed for the accounting only
+        if not self.ledger.on_message(topic, node, seq):
+            return
+        t_ns = stamp_ns(data) if topic not in topics.LATCHED_TOPICS else None
+        if t_ns is None:
+            t_ns = self._last_stamp_ns
+        elif t_ns > self._last_stamp_ns:
+            self._last_stamp_ns = t_ns
+        self.bag.write_raw(topic, data, t_ns, topics.TOPIC_TYPES[topic], seq)
+        if (self._last_stamp_ns - self._flushed_ns >= self._flush_ns
+                or self._last_rx - self._flushed_wall >= self._flush_wall_s):
+            self._flush()
+        self._status_due = True
+
+    def _read_report(self, topic: str, node: str, data: bytes) -> None:
+        from rclpy.serialization import deserialize_message
+
+        try:
+            msg = deserialize_message(data, topics.message_class(topic))
+        except Exception as exc:  # noqa: BLE001 - rclpy raises several types on bad bytes
+            self.get_logger().error(f"unreadable {topic} from {node}: {exc}")
+            return
+        counts = dict(zip(msg.published_topics, (int(c) for c in msg.published_counts)))
+        if topic == topics.SIM_STATUS:
+            self.ledger.on_report(node, counts, bool(msg.final), int(msg.commands_accepted))
+        else:
+            self.ledger.on_report(node, counts, bool(msg.done))
+        self._check_complete()
+
+    # ------------------------------------------------------------------ publisher identity
+    def _hold(self, gid: bytes, topic: str, data: bytes, seq: int) -> None:
+        since, held = self._pending.setdefault(gid, (time.monotonic(), []))
+        if len(held) < MAX_PENDING:
+            held.append((topic, data, seq))
+        else:
+            self.ledger.on_message(topic, "", seq)  # counted foreign: unidentifiable
+
+    def _resolve_pending(self) -> None:
+        for gid, (since, held) in list(self._pending.items()):
+            node = None
+            for topic in {t for t, _, _ in held}:
+                node = self._names.name(topic, gid) or node
+            if node is None and time.monotonic() - since < UNIDENTIFIED_AFTER_S:
+                continue
+            del self._pending[gid]
+            for topic, data, seq in held:
+                self._take(topic, node or "", data, seq)
+
+    # ------------------------------------------------------------------ progress
+    def _tick(self) -> None:
+        self._names.refresh(*self._subs)
+        if self._pending:
+            self._resolve_pending()
+        if self._status_due and not self.closed:
+            self._publish_status()
+        if not self.closed and time.monotonic() - self._flushed_wall >= self._flush_wall_s:
+            self._flush()
+        self._check_complete()
+
     def _flush(self) -> None:
-        flush_bag(self.bag)
+        self.bag.flush()
+        self._flushed_ns = self._last_stamp_ns
+        self._flushed_wall = time.monotonic()
+
+    def _publish_status(self) -> None:
+        self._status_due = False
+        self._unreported = 0
+        account = self.ledger.account()
+        msg = self._status_msg
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(self._last_stamp_ns, _NS_PER_S)
+        entries = [account.topics[t] for t in self.recorded]
+        msg.stored = [e.stored for e in entries]
+        msg.expected = [e.expected or 0 for e in entries]
+        msg.expected_known = [e.expected is not None for e in entries]
+        msg.foreign = [e.foreign for e in entries]
+        msg.gaps = [e.gaps for e in entries]
+        problems = account.problems()
+        msg.complete = not problems
+        msg.closed = self.closed
+        msg.detail = "complete" if not problems else problems[0]
+        self._status_pub.publish(msg)
+
+    def _check_complete(self) -> None:
+        if self.closed or not self.ledger.ended:
+            return
+        if self.ledger.account().complete and bool(
+                self.get_parameter("close_when_complete").value):
+            self._close()
+            self.finished = True
+
+    def _close(self) -> None:
+        """Write the accounting, close the bag, report."""
+        if self.closed:
+            return
+        account = self.ledger.account()
+        self.bag.set_accounting(account.to_dict(), account.complete)
+        self.bag.close()
+        self.closed = True
+        if not account.complete:
+            from fourws_ros.runtime import EXIT_INCOMPLETE
+
+            self.stop_reason = f"bag closed incomplete: {account.summary()}"
+            self.exit_code = EXIT_INCOMPLETE
+        self._publish_status()
+        total = sum(self.bag.counts.values())
+        summary = ", ".join(f"{t} {n}" for t, n in self.bag.counts.items())
+        foreign = sum(account.foreign_publishers.values())
+        print(f"[fourws_recorder] closed {self.bag.path}: {total} messages ({summary}); "
+              f"{account.summary()}"
+              + (f"; {foreign} foreign messages not stored" if foreign else ""),
+              file=sys.stderr, flush=True)
 
     def on_shutdown(self, executor: Any) -> None:
-        """Drain what DDS still holds for us, then close the bag."""
+        """Drain what DDS still holds for us, then close the bag with the accounting."""
         from fourws_ros.runtime import SPIN_TIMEOUT_S
 
-        quiet = float(self.get_parameter("drain_quiet_s").value)
-        start = self._last_rx = time.monotonic()
-        while (time.monotonic() - self._last_rx < quiet
-               and time.monotonic() - start < MAX_DRAIN_S):
-            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
-        self.bag.close()
-        total = sum(self.counts.values())
-        summary = ", ".join(f"{t} {n}" for t, n in self.counts.items())
-        print(f"[fourws_recorder] closed {self.bag.path}: {total} messages ({summary})",
-              file=sys.stderr, flush=True)
+        if not self.closed:
+            quiet = float(self.get_parameter("drain_quiet_s").value)
+            start = self._last_rx = time.monotonic()
+            while (not self.closed and time.monotonic() - self._last_rx < quiet
+                   and time.monotonic() - start < 30.0):
+                executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+            if self._pending:
+                self._resolve_pending()
+        self._close()
+
+
+def _steady_clock() -> Any:
+    from rclpy.clock import Clock, ClockType
+    return Clock(clock_type=ClockType.STEADY_TIME)
 
 
 def main(args: list[str] | None = None) -> int:

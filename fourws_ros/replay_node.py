@@ -42,8 +42,9 @@ from typing import Any
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rclpy.node import Node
 
-from fourws_ros import conversions, topics
+from fourws_ros import conversions, reporting, topics
 from fourws_ros.recorder_node import stamp_ns
+from fourws_run.ticks import Rejections
 from fourws_sim.errors import ParameterError
 
 MODES = ("timed", "answer")
@@ -107,8 +108,8 @@ class ReplayNode(Node):
         if not self.messages:
             raise ParameterError("bag_path", f"bag {path!r} has no messages on the chosen topics")
         played = sorted({topic for _, topic, _ in self.messages})
-        self.pubs = {t: self.create_publisher(topics.message_class(t), t, topics.TOPIC_QOS[t])
-                     for t in played}
+        self.counts = reporting.PublishCounts()
+        self.pubs = {t: self.counts.publisher(self, t) for t in played}
         if self.publish_clock and self.mode == "timed" and topics.CLOCK not in self.pubs:
             self.clock_pub = self.create_publisher(topics.message_class(topics.CLOCK),
                                                    topics.CLOCK, topics.CLOCK_QOS)
@@ -127,9 +128,8 @@ class ReplayNode(Node):
             self._total = self._left
             self._done_sent = False
             self._ticks = 0
-            self.status_pub = self.create_publisher(
-                topics.message_class(topics.MANEUVER_STATUS), topics.MANEUVER_STATUS,
-                topics.STATUS_QOS)
+            self._rejections = Rejections()
+            self.status_pub = self.counts.publisher(self, topics.MANEUVER_STATUS)
             self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                      self._on_state, topics.STREAM_QOS, raw=True)
         else:
@@ -145,8 +145,9 @@ class ReplayNode(Node):
             return
         due = self._by_stamp.pop(key, [])
         if not due and self._left == 0:
-            self._status(key, "done", True, "done: recorded input exhausted")
+            self._status(key, "done", True, "completed: recorded input exhausted")
             self._done_sent = True
+            self.finished = True  # deliver (on_shutdown) and exit
             self.get_logger().info(f"replay done after {self.published} messages")
             return
         for topic, data in due:
@@ -164,8 +165,9 @@ class ReplayNode(Node):
         msg.phase = phase
         msg.progress = 1.0 - self._left / self._total if self._total else 1.0
         msg.done = done
+        msg.end = "completed" if done else ""
         msg.event = event
-        self.status_pub.publish(msg)
+        reporting.publish_counted_status(self.status_pub, msg, self.counts, self._rejections)
 
     def _play_due(self) -> None:
         if self._t0_wall is None:
@@ -191,10 +193,7 @@ class ReplayNode(Node):
 
     def on_shutdown(self, _executor: Any) -> None:
         """Give reliable readers the time to take the last messages before the node goes."""
-        from rclpy.duration import Duration
-
-        for pub in self.pubs.values():
-            pub.wait_for_all_acked(Duration(seconds=2.0))
+        reporting.wait_delivered(self.counts, self.get_logger())
         self.get_logger().info(f"published {self.published} messages")
 
 

@@ -7,6 +7,8 @@ A node process ends in one of four ways, with a distinct exit code the launcher 
   parameter, unknown name, malformed YAML); its message, which names the field, is logged;
 * :data:`EXIT_RUN_STOPPED` (3) — the node stopped the run for a reason of the simulation
   (non-finite state, ...), given in ``node.stop_reason``;
+* :data:`EXIT_INCOMPLETE` (4) — the recorder closed a bag that does not hold every message
+  the run published (its accounting says what is missing);
 * anything else — a crash (Python traceback in the log).
 
 Signals are handled here rather than by rclpy (``SignalHandlerOptions.NO``) so a node can
@@ -24,6 +26,7 @@ EXIT_OK = 0
 EXIT_CRASH = 1
 EXIT_USER_ERROR = 2
 EXIT_RUN_STOPPED = 3
+EXIT_INCOMPLETE = 4
 
 #: How long the executor runs callbacks before the spin loop checks for a signal or a finished
 #: node again, s (how quickly a signal is noticed).
@@ -40,12 +43,15 @@ class _StopFlag:
         self.signal = signum
 
 
-def make_executor(context: Any = None) -> Any:
+def make_executor(context: Any = None, message_info: bool = False) -> Any:
     """The executor the nodes use: rclpy's C++ events executor when present (lower overhead per
-    callback, which bounds the lockstep rate), else the single-threaded executor."""
+    callback, which bounds the lockstep rate), else the single-threaded executor.
+
+    ``message_info``: the node's callbacks take rclpy message info (publisher identity and
+    sequence number), which only the single-threaded executor delivers."""
     import os
 
-    if os.environ.get("FOURWS_EXECUTOR", "events") == "events":
+    if not message_info and os.environ.get("FOURWS_EXECUTOR", "events") == "events":
         try:
             from rclpy.experimental import EventsExecutor
             return EventsExecutor(context=context)
@@ -60,8 +66,10 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     """Create the node with ``factory`` and spin it until a signal or until it finishes.
 
     The node may define ``finished`` (bool attribute: stop spinning), ``stop_reason`` (str:
-    non-empty means the run was stopped, exit code :data:`EXIT_RUN_STOPPED`) and
-    ``on_shutdown(executor)`` (called after the spin loop, before the context shuts down).
+    non-empty means the run was stopped, exit code :data:`EXIT_RUN_STOPPED`, or ``exit_code``
+    if the node sets one), ``needs_message_info`` (class attribute: spin with an executor
+    that delivers message info) and ``on_shutdown(executor)`` (called after the spin loop,
+    before the context shuts down).
 
     Parameters
     ----------
@@ -99,7 +107,7 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
             # ParameterException: a --ros-args/-p value outside its descriptor's range or type
             print(f"[{name}] error: {exc}", file=sys.stderr, flush=True)
             return EXIT_USER_ERROR
-        executor = make_executor()
+        executor = make_executor(message_info=getattr(node, "needs_message_info", False))
         executor.add_node(node)
         # Callbacks run inside the executor for SPIN_TIMEOUT_S at a time (spinning until a
         # future that never completes, with that timeout), not one per spin_once: with the
@@ -117,7 +125,7 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
         reason = getattr(node, "stop_reason", "")
         if reason:
             print(f"[{node.get_name()}] run stopped: {reason}", file=sys.stderr, flush=True)
-            code = EXIT_RUN_STOPPED
+            code = int(getattr(node, "exit_code", EXIT_RUN_STOPPED) or EXIT_RUN_STOPPED)
         executor.remove_node(node)
         executor.shutdown(timeout_sec=1.0)
     finally:

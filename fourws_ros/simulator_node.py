@@ -1,31 +1,42 @@
-"""Simulator node: integrates a vehicle model and publishes its state (thin over the core).
+"""Simulator node: the vehicle model of a run, publishing its state and taking the answers.
+
+The node is an adapter: the tick sequence, the trust rules for incoming messages, realtime
+pacing and recorder flow control are :mod:`fourws_run.ticks` (shared with the offline twin
+:func:`fourws_run.closed_loop.run_closed_loop`); the node converts messages and owns the ROS
+objects.
 
 Clock modes
 -----------
 ``lockstep`` (deterministic, faster than real time)
     Tick ``k``: publish ``VehicleState`` ``y_k`` (and ``/clock``); wait until the maneuver
     answered with the ``DriverInput`` stamped ``y_k``'s stamp and the controller with the
-    ``RearSteerCommand`` whose ``state_step`` is ``y_k.step``; integrate one control period
-    with those inputs held; publish ``y_{k+1}``. This is the sequence of
-    :func:`fourws_sim.closed_loop.run_closed_loop` (its docstring is the contract), so a
-    lockstep run is bit-identical to it. ``state_period_s`` does not apply: one state per tick.
+    ``RearSteerCommand`` whose ``state_step`` and ``state_stamp`` are ``y_k``'s; integrate
+    one control period with those inputs held; publish ``y_{k+1}``. Bit-identical to the
+    offline twin. With ``recorder_window`` > 0 the next tick is published only while the
+    recorder has stored all but at most that many messages of every recorded topic
+    (:class:`fourws_run.ticks.FlowWindow`): a slow recorder slows the run, it never loses data.
 ``realtime`` (paced by the wall clock)
-    A dedicated thread integrates one step every ``integration_step_s`` of wall time,
-    samples the latest driver input and rear-steer command at each control tick (zero-order
-    hold), publishes the state every ``state_period_s``. Each step's start is compared with
-    its wall-clock deadline: the lateness (last and max) and the overruns (steps that started
-    a whole period late; the schedule is then re-based instead of racing to catch up) are
-    published on ``/fourws/sim_status``.
+    A thread integrates one step every ``integration_step_s`` of wall time, holds the latest
+    valid driver input and command (zero-order hold), publishes the state every
+    ``state_period_s``. Step lateness and every overrun go into the status messages (and so
+    into the bag).
 
-Safety
-------
-* A rear-steer command older than ``command_timeout_s`` (simulation time in realtime mode,
-  wall time waiting for the answer in lockstep mode) is replaced by zero rear steer; every
-  such tick is counted (``stale_commands``) and flagged (``command_timed_out``).
-* Commands that are not finite or exceed the vehicle's rear angle limit are ignored (logged,
-  counted) — the timeout then applies. Non-finite driver inputs are ignored likewise.
-* A non-finite state never leaves the node: the run stops, ``sim_status`` carries the reason
-  (``running = false``), the process exits with code 3.
+Trust
+-----
+Inputs that cannot be this run's answers -- another tick's or no tick's stamp, a second
+answer, non-finite or impossible values, a command naming a state that was never published --
+are refused and counted by reason (``SimulatorStatus.rejected_*``). A command's age is the
+simulation time since the state it answers was published, from the node's own record, so no
+message can keep a dead controller's last command alive. Missing command: zero rear steer
+(counted, ``command_timed_out``). Missing driver input: lockstep waits (the status says for
+what); realtime stops the run after ``driver_timeout_s`` without one, naming the maneuver node.
+
+End of a run
+------------
+When the maneuver reports ``done`` for the state the simulator is waiting on (or the
+simulation diverges), the node stops integrating, publishes a final status (``final``, the
+reason, every count), waits until every subscriber acknowledged all it published, and exits
+(``exit_when_done``; otherwise it stays paused). A diverged run exits with code 3.
 
 Services: ``/fourws/reset`` (``std_srvs/Trigger``) back to the initial speed at t = 0;
 ``/fourws/pause`` (``std_srvs/SetBool``, true = pause). With ``autostart`` false the node
@@ -41,13 +52,15 @@ import threading
 import time
 from typing import Any
 
-import numpy as np
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
 from rclpy.node import Node
 
-from fourws_ros import cdr, conversions, topics
-from fourws_sim.errors import FourwsError, NonFiniteError, ParameterError, UnknownNameError
+from fourws_ros import cdr, conversions, reporting, topics
+from fourws_run.ticks import (FlowWindow, InputLimits, LockstepAnswers, Pacer, RealtimeAnswers,
+                              Tick, TickEngine, whole_multiple)
+from fourws_sim.drivers import DriverCommand
+from fourws_sim.errors import ParameterError, UnknownNameError
 
 CLOCK_MODES = ("lockstep", "realtime")
 #: Shortest/longest integration step a parameter may set, s.
@@ -55,15 +68,12 @@ MIN_STEP_S, MAX_STEP_S = 1e-5, 0.1
 #: Lockstep: wall time to wait for the controller after it has missed a tick, s (a healthy
 #: controller answers within ~1 ms).
 LOST_WAIT_S = 0.02
-#: Realtime: how many overruns are itemized in the shutdown log line.
-MAX_OVERRUN_LOG = 20
-#: Step-lateness histogram (realtime): bin width, s, and bin count (the last bin collects
-#: everything later than 20 ms).
-LATENESS_BIN_S = 1e-5
-LATENESS_BINS = 2000
 #: GIL switch interval while the realtime thread runs, s (Python's default 5 ms would let a
 #: subscriber callback delay a step by up to 5 ms).
 _SWITCH_INTERVAL_S = 1e-4
+#: Topics whose counts the simulator knows for flow control (its own and the accepted answers).
+_FLOW_TOPICS = (topics.STATE, topics.ODOM, topics.IMU, topics.SIM_STATUS, topics.DRIVER_INPUT,
+                topics.REAR_STEER_CMD)
 
 
 def _frange(lo: float, hi: float) -> list[FloatingPointRange]:
@@ -75,62 +85,15 @@ class SimulatorNode(Node):
 
     def __init__(self) -> None:
         super().__init__("fourws_simulator")
-        ro = dict(read_only=True)
-        self.declare_parameter("vehicle", "table_8_1", ParameterDescriptor(
-            description="vehicle (config/vehicles name or YAML path)", **ro))
-        self.declare_parameter("model", "8dof", ParameterDescriptor(
-            description="vehicle model (fourws_sim.models name)", **ro))
-        self.declare_parameter("tire", "", ParameterDescriptor(
-            description="tire model override ('' = the vehicle file's)", **ro))
-        self.declare_parameter("integrator", "rk4", ParameterDescriptor(
-            description="integrator name", **ro))
-        self.declare_parameter("integration_step_s", 1e-3, ParameterDescriptor(
-            description="integration step, s", floating_point_range=_frange(MIN_STEP_S,
-                                                                            MAX_STEP_S), **ro))
-        self.declare_parameter("control_period_s", 0.01, ParameterDescriptor(
-            description="control period (driver/controller tick), s; whole multiple of the "
-                        "integration step", floating_point_range=_frange(MIN_STEP_S, 1.0), **ro))
-        self.declare_parameter("state_period_s", 0.01, ParameterDescriptor(
-            description="realtime: state publish period, s; whole multiple of the step",
-            floating_point_range=_frange(MIN_STEP_S, 1.0), **ro))
-        self.declare_parameter("viz_period_s", 0.02, ParameterDescriptor(
-            description="odometry/IMU publish period (simulation time), s",
-            floating_point_range=_frange(MIN_STEP_S, 10.0)))
-        self.declare_parameter("status_period_s", 0.1, ParameterDescriptor(
-            description="sim_status publish period (simulation time), s",
-            floating_point_range=_frange(1e-3, 10.0)))
-        self.declare_parameter("clock_mode", "lockstep", ParameterDescriptor(
-            description="lockstep | realtime", **ro))
-        self.declare_parameter("initial_speed_mps", 23.611111111111111, ParameterDescriptor(
-            description="forward speed at reset, m/s", floating_point_range=_frange(0.0, 100.0)))
-        self.declare_parameter("command_timeout_s", 1.0, ParameterDescriptor(
-            description="rear-steer command age (realtime: simulation time; lockstep: wall "
-                        "wait) after which rear steer falls back to zero, s",
-            floating_point_range=_frange(1e-3, 60.0)))
-        self.declare_parameter("autostart", True, ParameterDescriptor(
-            description="start running at once (false: paused until /fourws/pause false)"))
-        self.declare_parameter("expected_state_subscribers", 0, ParameterDescriptor(
-            description="lockstep: wait for this many /fourws/state subscribers before the "
-                        "first tick", integer_range=[IntegerRange(from_value=0, to_value=64,
-                                                                  step=1)], **ro))
-        self.declare_parameter("realtime_priority", 20, ParameterDescriptor(
-            description="realtime: SCHED_FIFO priority of the integration thread (1-99; 0 = "
-                        "normal scheduling). Needs CAP_SYS_NICE; without it the node warns "
-                        "and runs with normal priority", integer_range=[IntegerRange(
-                            from_value=0, to_value=99, step=1)], read_only=True))
-        self.declare_parameter("recorder_window_ticks", 0, ParameterDescriptor(
-            description="lockstep: run at most this many ticks ahead of the states the "
-                        "recorder reports written (0 = no recorder flow control)",
-            integer_range=[IntegerRange(from_value=0, to_value=topics.STREAM_DEPTH // 2,
-                                        step=1)], read_only=True))
+        self._declare_parameters()
         self._cfg: dict[str, Any] = {name: self._param(name) for name in self._LIVE}
         self.add_on_set_parameters_callback(self._on_set)
-
         self._build_core()
         self._create_ros_interfaces()
-        self.finished = False
-        self.stop_reason = ""
-        self.paused = not bool(self.get_parameter("autostart").value)
+        self.finished = False  # run_node: stop spinning
+        self.stop_reason = ""  # run_node: exit code 3 (the run stopped for its own reason)
+        self.ended = ""  # why the simulation ended ('' while it runs)
+        self.paused = not bool(self._param("autostart"))
         self._lock = threading.Lock()
         self._rt_thread: threading.Thread | None = None
         self._reset_state()
@@ -141,21 +104,82 @@ class SimulatorNode(Node):
             + (" (paused)" if self.paused else ""))
 
     # ------------------------------------------------------------------ setup
+    def _declare_parameters(self) -> None:
+        ro = dict(read_only=True)
+        declare = self.declare_parameter
+        declare("vehicle", "table_8_1", ParameterDescriptor(
+            description="vehicle (config/vehicles name or YAML path)", **ro))
+        declare("vehicle_json", "", ParameterDescriptor(
+            description="the simulated vehicle as a whole vehicle-file mapping in JSON "
+                        "(overrides vehicle when not empty)", **ro))
+        declare("model", "8dof", ParameterDescriptor(
+            description="vehicle model (fourws_sim.models name)", **ro))
+        declare("tire", "", ParameterDescriptor(
+            description="tire model override ('' = the vehicle file's)", **ro))
+        declare("integrator", "rk4", ParameterDescriptor(description="integrator name", **ro))
+        declare("integration_step_s", 1e-3, ParameterDescriptor(
+            description="integration step, s",
+            floating_point_range=_frange(MIN_STEP_S, MAX_STEP_S), **ro))
+        declare("control_period_s", 0.01, ParameterDescriptor(
+            description="control period (driver/controller tick), s; whole multiple of the "
+                        "integration step", floating_point_range=_frange(MIN_STEP_S, 1.0), **ro))
+        declare("state_period_s", 0.01, ParameterDescriptor(
+            description="realtime: state publish period, s; whole multiple of the step",
+            floating_point_range=_frange(MIN_STEP_S, 1.0), **ro))
+        declare("viz_period_s", 0.02, ParameterDescriptor(
+            description="odometry/IMU publish period (simulation time), s",
+            floating_point_range=_frange(MIN_STEP_S, 10.0)))
+        declare("status_period_s", 0.1, ParameterDescriptor(
+            description="sim_status publish period (simulation time), s",
+            floating_point_range=_frange(1e-3, 10.0)))
+        declare("clock_mode", "lockstep", ParameterDescriptor(
+            description="lockstep | realtime", **ro))
+        declare("initial_speed_mps", 23.611111111111111, ParameterDescriptor(
+            description="forward speed at reset, m/s", floating_point_range=_frange(0.0, 100.0)))
+        declare("command_timeout_s", 1.0, ParameterDescriptor(
+            description="rear-steer command age (realtime: simulation time since the state "
+                        "it answers; lockstep: wall wait) after which rear steer falls back "
+                        "to zero, s", floating_point_range=_frange(1e-3, 60.0)))
+        declare("driver_timeout_s", 1.0, ParameterDescriptor(
+            description="realtime: simulation time without a new driver input after which "
+                        "the run stops (the maneuver node stopped answering), s",
+            floating_point_range=_frange(1e-3, 60.0)))
+        declare("autostart", True, ParameterDescriptor(
+            description="start running at once (false: paused until /fourws/pause false)"))
+        declare("exit_when_done", True, ParameterDescriptor(
+            description="exit once the run has ended and everything published is delivered "
+                        "(false: stay up, paused)"))
+        declare("expected_state_subscribers", 0, ParameterDescriptor(
+            description="lockstep: wait for this many /fourws/state subscribers before the "
+                        "first tick", integer_range=[IntegerRange(from_value=0, to_value=64,
+                                                                  step=1)], **ro))
+        declare("realtime_priority", 20, ParameterDescriptor(
+            description="realtime: SCHED_FIFO priority of the integration thread (1-99; 0 = "
+                        "normal scheduling). Needs CAP_SYS_NICE; without it the node warns "
+                        "and runs with normal priority", integer_range=[IntegerRange(
+                            from_value=0, to_value=99, step=1)], read_only=True))
+        declare("recorder_window", 0, ParameterDescriptor(
+            description="lockstep: run at most this many messages of any recorded topic "
+                        "ahead of what the recorder reports stored (0 = no recorder flow "
+                        "control; must stay below the stream history depth)",
+            integer_range=[IntegerRange(from_value=0, to_value=topics.STREAM_DEPTH // 2,
+                                        step=1)], read_only=True))
+
     def _param(self, name: str) -> Any:
         return self.get_parameter(name).value
 
     def _build_core(self) -> None:
-        from fourws_sim.params import Tire, load_vehicle
+        from fourws_sim.params import Tire
         from fourws_sim.simulator import Simulator
+        from fourws_sim.tires import TIRES
 
         self.clock_mode = str(self._param("clock_mode"))
         if self.clock_mode not in CLOCK_MODES:
             raise ParameterError("clock_mode", f"must be one of {', '.join(CLOCK_MODES)}, got "
                                  f"{self.clock_mode!r}")
-        vehicle = load_vehicle(str(self._param("vehicle")))
+        vehicle = conversions.vehicle_from_params(self)
         tire = str(self._param("tire"))
         if tire:
-            from fourws_sim.tires import TIRES
             if tire not in TIRES:
                 raise UnknownNameError("tire", tire, list(TIRES))
             base = vehicle.tire if vehicle.tire is not None else Tire()
@@ -164,31 +188,27 @@ class SimulatorNode(Node):
         self.model_name = str(self._param("model"))
         self.dt_s = float(self._param("integration_step_s"))
         self.control_period_s = float(self._param("control_period_s"))
-        self.n_control = _whole_multiple(self.control_period_s, self.dt_s, "control_period_s")
-        self.n_state = _whole_multiple(float(self._param("state_period_s")), self.dt_s,
-                                       "state_period_s")
-        self.sim = Simulator(vehicle, model=self.model_name,
-                             integrator=str(self._param("integrator")), dt_s=self.dt_s)
+        self.n_state = whole_multiple(float(self._param("state_period_s")), self.dt_s,
+                                      "state_period_s")
+        sim = Simulator(vehicle, model=self.model_name,
+                        integrator=str(self._param("integrator")), dt_s=self.dt_s)
+        self.engine = TickEngine(sim, self.control_period_s)
+        self.n_control = self.engine.n_control
         # compile the numba kernels now, not in the first (realtime) step
-        from fourws_sim.closed_loop import simulator_inputs
-        from fourws_sim.drivers import DriverCommand
-        self.sim.reset(speed_mps=float(self._cfg["initial_speed_mps"]))
-        self.sim.step(simulator_inputs(DriverCommand(0.0, 0.0), 0.0), n_steps=1)
-        self.sim.outputs()
-        self.rear_limit_rad = float(vehicle.actuators.rear_angle_limit_rad)
+        self.engine.reset(float(self._cfg["initial_speed_mps"]))
+        self.engine.advance(DriverCommand(0.0, 0.0), 0.0, n_steps=1)
+        self.limits = InputLimits.for_vehicle(vehicle)
 
     def _create_ros_interfaces(self) -> None:
         from std_srvs.srv import SetBool, Trigger
 
         msg = topics.message_class
-        self.state_pub = self.create_publisher(msg(topics.STATE), topics.STATE,
-                                               topics.STREAM_QOS)
-        self.clock_pub = self.create_publisher(msg(topics.CLOCK), topics.CLOCK,
-                                               topics.CLOCK_QOS)
-        self.odom_pub = self.create_publisher(msg(topics.ODOM), topics.ODOM, topics.STREAM_QOS)
-        self.imu_pub = self.create_publisher(msg(topics.IMU), topics.IMU, topics.STREAM_QOS)
-        self.status_pub = self.create_publisher(msg(topics.SIM_STATUS), topics.SIM_STATUS,
-                                                topics.STATUS_QOS)
+        self.counts = reporting.PublishCounts()
+        self.state_pub = self.counts.publisher(self, topics.STATE)
+        self.clock_pub = self.create_publisher(msg(topics.CLOCK), topics.CLOCK, topics.CLOCK_QOS)
+        self.odom_pub = self.counts.publisher(self, topics.ODOM)
+        self.imu_pub = self.counts.publisher(self, topics.IMU)
+        self.status_pub = self.counts.publisher(self, topics.SIM_STATUS)
         # raw + fourws_ros.cdr: short lockstep answer chain
         self.driver_sub = self.create_subscription(msg(topics.DRIVER_INPUT),
                                                    topics.DRIVER_INPUT, self._on_driver,
@@ -196,9 +216,11 @@ class SimulatorNode(Node):
         self.cmd_sub = self.create_subscription(msg(topics.REAR_STEER_CMD),
                                                 topics.REAR_STEER_CMD, self._on_cmd,
                                                 topics.STREAM_QOS, raw=True)
-        self.create_subscription(msg(topics.RECORDER_PROGRESS), topics.RECORDER_PROGRESS,
-                                 self._on_recorder_progress, topics.STATUS_QOS)
-        self.recorder_window = int(self._param("recorder_window_ticks"))
+        self.create_subscription(msg(topics.MANEUVER_STATUS), topics.MANEUVER_STATUS,
+                                 self._on_maneuver_status, topics.STATUS_QOS)
+        self.create_subscription(msg(topics.RECORDER_STATUS), topics.RECORDER_STATUS,
+                                 self._on_recorder_status, topics.STATUS_QOS)
+        self.window = FlowWindow(int(self._param("recorder_window")), _FLOW_TOPICS)
         # state, odometry, IMU and clock go out as CDR bytes written straight from the outputs
         # (fourws_ros.cdr), not through Python messages: a shorter lockstep tick, and less
         # time holding the GIL in the realtime thread
@@ -207,8 +229,17 @@ class SimulatorNode(Node):
         self._imu_encoder = cdr.ImuEncoder(topics.FRAME_BODY)
         self.create_service(Trigger, topics.SRV_RESET, self._on_reset)
         self.create_service(SetBool, topics.SRV_PAUSE, self._on_pause)
+        self._config_pub = reporting.publish_node_config(self, self.counts, topics.Role.SIMULATOR, {
+            "vehicle": self.vehicle.to_dict(), "model": self.model_name,
+            "tire": self.vehicle.tire.model if self.vehicle.tire is not None else "",
+            "integrator": str(self._param("integrator")), "integration_step_s": self.dt_s,
+            "control_period_s": self.control_period_s,
+            "state_period_s": float(self._param("state_period_s")),
+            "clock_mode": self.clock_mode,
+            "initial_speed_mps": float(self._cfg["initial_speed_mps"])})
 
-    _LIVE = ("viz_period_s", "status_period_s", "command_timeout_s", "initial_speed_mps")
+    _LIVE = ("viz_period_s", "status_period_s", "command_timeout_s", "driver_timeout_s",
+             "initial_speed_mps")
 
     def _on_set(self, params: list[Any]) -> SetParametersResult:
         """Validate live changes (ranges are enforced by the descriptors); cache the values."""
@@ -223,79 +254,87 @@ class SimulatorNode(Node):
         return SetParametersResult(successful=True)
 
     def _reset_state(self) -> None:
-        from fourws_sim.drivers import DriverCommand
-
-        self.sim.reset(speed_mps=float(self._cfg["initial_speed_mps"]))
-        self.step_count = 0
-        self.driver = DriverCommand(0.0, 0.0)
-        self.driver_stamp_ns = -1
-        self.rear_cmd_rad = 0.0
-        self.rear_cmd_step = -1
-        self.rear_cmd_time_s = -math.inf
+        self.engine.reset(float(self._cfg["initial_speed_mps"]))
+        self.answers = LockstepAnswers(self.limits)
+        self.rt_answers = RealtimeAnswers(self.limits)
+        self.pacer = Pacer(self.dt_s)
         self.stale_commands = 0
         self.command_timed_out = False
-        self.lateness_s = 0.0
-        self.max_lateness_s = 0.0
-        self.lateness_hist = np.zeros(LATENESS_BINS, dtype=np.int64)
-        self.overruns = 0
-        self.max_lateness_at_s = 0.0
-        self.overrun_log: list[tuple[float, float]] = []
-        self.steps_done = 0
         self._next_viz_s = 0.0
         self._next_status_s = 0.0
-        self._awaiting: _Tick | None = None  # lockstep: the state waiting for its answers
-        self._blocked_state: Any = None  # lockstep: a tick held back by flow control
-        self.ticks_published = 0
-        self.recorder_states = 0
+        self._held: Tick | None = None  # lockstep: a tick held back by flow control
+        self._held_since = 0.0
+        self.held_s = 0.0  # lockstep: wall time spent waiting for the recorder
+        self._recorder_seen = self.window.window == 0
         self.answer_wait_s = 0.0  # lockstep: wall time from state sent to both answers in
         self.tick_work_s = 0.0  # lockstep: wall time integrating and publishing
+        self.ticks = 0
         self._sent_at = 0.0
         self._await_since = 0.0
         self._started = False
+
+    @property
+    def rejections(self) -> Any:
+        """The refusals of the current mode's answer book."""
+        return self.answers.rejections if self.clock_mode == "lockstep" \
+            else self.rt_answers.rejections
+
+    def _book(self) -> LockstepAnswers | RealtimeAnswers:
+        return self.answers if self.clock_mode == "lockstep" else self.rt_answers
 
     # ------------------------------------------------------------------ inputs
     def _on_driver(self, raw: bytes) -> None:
         try:
             stamp, cmd = cdr.parse_driver_input(raw)
-            if not math.isfinite(sum(cmd.drive_torque_nm) + sum(cmd.brake_torque_nm)
-                                 + cmd.front_wheel_angle_rad + cmd.steering_torque_nm
-                                 + cmd.steering_wheel_angle_rad):
-                conversions.check_finite_mapping(cmd.to_dict(), "driver input")
-        except (cdr.CdrError, NonFiniteError) as exc:
-            self.get_logger().error(f"ignored driver input: {exc}", throttle_duration_sec=1.0)
+        except cdr.CdrError as exc:
+            self.rejections.add(topics.DRIVER_INPUT, "not a DriverInput", str(exc))
             return
-        self.driver = cmd
-        self.driver_stamp_ns = stamp
-        if self._awaiting is not None:
-            self._lockstep_try_advance()
+        if self.clock_mode == "realtime":
+            with self._lock:
+                self.rt_answers.offer_driver(stamp, cmd)
+            return
+        if self.answers.offer_driver(stamp, cmd) and self.answers.complete:
+            self._lockstep_advance()
 
     def _on_cmd(self, raw: bytes) -> None:
         try:
             msg = cdr.parse_rear_steer_command(raw)
         except cdr.CdrError as exc:
-            self.get_logger().error(f"ignored rear-steer command: {exc}",
-                                    throttle_duration_sec=1.0)
+            self.rejections.add(topics.REAR_STEER_CMD, "not a RearSteerCommand", str(exc))
             return
-        angle = msg["angle_rad"]
-        if not math.isfinite(angle) or abs(angle) > self.rear_limit_rad * (1.0 + 1e-12):
-            self.stale_commands += 1
-            self.get_logger().error(
-                f"ignored rear-steer command {angle!r} rad from law {msg['law']!r}: "
-                f"{'not finite' if not math.isfinite(angle) else 'beyond the rear angle limit'}"
-                f" ({self.rear_limit_rad} rad)", throttle_duration_sec=1.0)
+        if self.clock_mode == "realtime":
+            with self._lock:
+                self.rt_answers.offer_command(msg["state_step"], msg["state_stamp_ns"],
+                                              msg["angle_rad"])
             return
-        self.rear_cmd_rad = angle
-        self.rear_cmd_step = msg["state_step"]
-        self.rear_cmd_time_s = msg["state_stamp_ns"] * 1e-9
-        if self._awaiting is not None:
-            self._lockstep_try_advance()
+        if self.answers.offer_command(msg["state_step"], msg["state_stamp_ns"],
+                                      msg["angle_rad"]) and self.answers.complete:
+            self._lockstep_advance()
 
-    def _on_recorder_progress(self, msg: Any) -> None:
-        self.recorder_states = int(msg.data)
-        blocked = self._blocked_state
-        if blocked is not None and self.ticks_published - self.recorder_states <= \
-                self.recorder_window:
-            self._send_tick(blocked)
+    def _on_maneuver_status(self, msg: Any) -> None:
+        if not msg.done or self.ended:
+            return
+        stamp = conversions.stamp_to_ns(msg.header.stamp)
+        if self.clock_mode == "lockstep":
+            # the maneuver ends the run instead of answering the state the simulator waits on
+            tick = self.answers.awaited
+            if tick is None or stamp != tick.stamp_ns:
+                self.rejections.add(topics.MANEUVER_STATUS, "done for no awaited state",
+                                    f"stamp {stamp} ns")
+                return
+        elif not self.rt_answers.was_published(stamp):
+            self.rejections.add(topics.MANEUVER_STATUS, "done for no published state",
+                                f"stamp {stamp} ns")
+            return
+        end = msg.event or "done"
+        self._end(f"maneuver {msg.maneuver!r} {end}")
+
+    def _on_recorder_status(self, msg: Any) -> None:
+        self.window.update(dict(zip(msg.topics, (int(n) for n in msg.stored))))
+        self._recorder_seen = True
+        held = self._held
+        if held is not None and not self._holding_back():
+            self._send_tick(held)
 
     # ------------------------------------------------------------------ services
     def _on_reset(self, _request: Any, response: Any) -> Any:
@@ -305,6 +344,7 @@ class SimulatorNode(Node):
             return response
         with self._lock:
             self._reset_state()
+            self.ended = ""
         response.success = True
         response.message = f"reset to {self._param('initial_speed_mps')} m/s at t = 0"
         if not self.paused:
@@ -319,7 +359,8 @@ class SimulatorNode(Node):
         elif not pause and self.paused:
             self.paused = False
             if self.clock_mode == "lockstep" and self._started:
-                self._lockstep_try_advance()  # answers that came while paused count now
+                if self.answers.complete:  # answers that came while paused count now
+                    self._lockstep_advance()
             else:
                 self._start()
         response.success = True
@@ -328,151 +369,162 @@ class SimulatorNode(Node):
 
     # ------------------------------------------------------------------ running
     def _housekeeping(self) -> None:
-        if self.finished or self.paused:
+        if self.ended or self.paused:
             return
         if not self._started:
             self._start()
             return
-        if self.clock_mode == "lockstep" and self._awaiting is not None:
+        if self.clock_mode == "lockstep":
+            if self.answers.awaited is None or self.answers.driver is None:
+                return  # no tick sent, or the maneuver has not answered yet (it ends runs)
             waited = time.monotonic() - self._await_since
             # once the controller has missed a tick, the following ones wait only
             # LOST_WAIT_S (a stopped controller must not cost a full timeout per tick; one
             # that answers again within it is back in the loop)
             limit = LOST_WAIT_S if self.command_timed_out else self._cfg["command_timeout_s"]
             if waited > limit:
-                self._lockstep_try_advance(timed_out=True)
+                self._lockstep_advance()
 
     def _graph_ready(self) -> bool:
         need = int(self._param("expected_state_subscribers"))
         return (self.state_pub.get_subscription_count() >= need
                 and (need == 0 or (self.driver_sub.get_publisher_count() >= 1
-                                   and self.cmd_sub.get_publisher_count() >= 1)))
+                                   and self.cmd_sub.get_publisher_count() >= 1))
+                and self._recorder_seen)
 
     def _start(self) -> None:
-        if self.finished or self._started and self.clock_mode == "lockstep":
+        if self.ended or self._started and self.clock_mode == "lockstep":
             return
+        if not self._graph_ready():
+            return  # housekeeping tries again
+        self._started = True
         if self.clock_mode == "lockstep":
-            if not self._graph_ready():
-                return  # housekeeping tries again
-            self._started = True
-            self._publish_tick()
+            self._publish_tick(self.engine.tick)
         else:
-            self._started = True
             self._rt_thread = threading.Thread(target=self._realtime_loop, daemon=True)
             self._rt_thread.start()
 
-    def _stop(self, reason: str) -> None:
-        self.stop_reason = reason
-        self.finished = True
-        self.get_logger().error(f"run stopped: {reason}")
-        self._publish_status(self.sim.time_s, running=False)
+    def _end(self, reason: str, failed: bool = False) -> None:
+        """The simulation ends: final status, then (``exit_when_done``) deliver and exit."""
+        if self.ended:
+            return
+        self.ended = reason
+        self.paused = True
+        if threading.current_thread() is not self._rt_thread:
+            self._stop_rt_thread()
+        if failed:
+            self.stop_reason = reason
+            self.get_logger().error(f"run stopped: {reason}")
+        else:
+            self.get_logger().info(f"run ended: {reason}")
+        self._publish_status(self.engine.sim.time_s, final=True)
+        if bool(self._param("exit_when_done")):
+            self.finished = True
 
     # -- lockstep
-    def _publish_tick(self) -> None:
-        outputs = self.sim.outputs()
-        t = float(outputs.get("sim_time_s", self.sim.time_s))
-        step = self.step_count
-        try:
-            raw = self._state_encoder.encode(outputs, t, step)
-        except NonFiniteError as exc:
-            self._stop(f"non-finite state: {exc}")
-            return
-        tick = _Tick(raw, outputs, t, step, conversions.time_to_ns(t))
-        window = self.recorder_window
-        if window and self.ticks_published - self.recorder_states > window:
-            self._blocked_state = tick  # the recorder's progress releases it
+    def _holding_back(self) -> str:
+        sent = dict(self.counts.counts)
+        sent[topics.DRIVER_INPUT] = self.answers.driver_inputs_accepted
+        sent[topics.REAR_STEER_CMD] = self.answers.commands_accepted
+        return self.window.holding_back(sent)
+
+    def _publish_tick(self, tick: Tick) -> None:
+        if self._holding_back():
+            self._held = tick  # the recorder's next status releases it
+            self._held_since = time.monotonic()
             return
         self._send_tick(tick)
 
-    def _send_tick(self, tick: "_Tick") -> None:
-        self._blocked_state = None
-        self.ticks_published += 1
-        self._awaiting = tick
+    def _send_tick(self, tick: Tick) -> None:
+        if self._held is not None:
+            self.held_s += time.monotonic() - self._held_since
+        self._held = None
+        try:
+            raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
+        except conversions.NonFiniteError as exc:
+            self._end(f"non-finite state at t = {tick.t:.4f} s: {exc}", failed=True)
+            return
+        self.answers.expect(tick)
         self._await_since = time.monotonic()
         self._sent_at = time.perf_counter()
-        self.state_pub.publish(tick.raw)  # first: the answers' critical path starts here
+        self.state_pub.publish(raw)  # first: the answers' critical path starts here
         self.clock_pub.publish(cdr.encode_clock(tick.t))
-        self._publish_side(tick.t, tick.outputs, tick.stamp_ns)
+        self._publish_side(tick)
 
-    def _lockstep_try_advance(self, timed_out: bool = False) -> None:
-        tick = self._awaiting
-        if tick is None or self.paused or self.finished:
+    def _lockstep_advance(self) -> None:
+        if self.paused or self.ended or self.answers.awaited is None \
+                or self.answers.driver is None:
             return
-        have_driver = self.driver_stamp_ns == tick.stamp_ns
-        have_cmd = self.rear_cmd_step == tick.step
-        if not have_driver:
-            # the maneuver is done (the launcher ends the run) or has stopped answering
-            if timed_out:
-                self.get_logger().warning(f"no driver input for step {tick.step}",
-                                          throttle_duration_sec=5.0)
-            return
-        if not have_cmd and not timed_out:
-            return
-        rear = self.rear_cmd_rad if have_cmd else 0.0
-        self.command_timed_out = not have_cmd
-        if not have_cmd:
-            self.stale_commands += 1
-            self.get_logger().warning(
-                f"no rear-steer command for step {tick.step} (t = {tick.t:.2f} s) "
-                f"within {self._cfg['command_timeout_s']} s: zero rear steer "
-                f"({self.stale_commands} ticks so far)", throttle_duration_sec=1.0)
-        self._awaiting = None
         now = time.perf_counter()
         self.answer_wait_s += now - self._sent_at
-        if self._integrate(rear, self.n_control):
-            self._publish_tick()
+        tick = self.answers.awaited
+        driver, rear, timed_out = self.answers.close()
+        self.command_timed_out = timed_out
+        if timed_out:
+            self.stale_commands += 1
+            self.get_logger().warning(
+                f"no rear-steer command for step {tick.step} (t = {tick.t:.2f} s) in time: "
+                f"zero rear steer ({self.stale_commands} ticks so far)",
+                throttle_duration_sec=1.0)
+        self.ticks += 1
+        if self.engine.advance(driver, rear):
+            self._publish_tick(self.engine.tick)
+        else:
+            self._end(self.engine.diverged, failed=True)
         self.tick_work_s += time.perf_counter() - now
 
-    def _integrate(self, rear_rad: float, n_steps: int) -> bool:
-        from fourws_sim.closed_loop import simulator_inputs
-
-        u = simulator_inputs(self.driver, rear_rad)
-        try:
-            # the simulator raises on a non-finite state; derived outputs are checked when
-            # the state message is built (conversions.state_msg)
-            self.sim.step(u, n_steps=n_steps)
-        except FourwsError as exc:
-            self._stop(f"non-finite state at t = {self.sim.time_s:.4f} s: {exc}")
-            return False
-        self.step_count += n_steps
-        self.steps_done += n_steps
-        return True
-
-    def _publish_side(self, t: float, outputs: Any, stamp_ns: int) -> None:
-        """Odometry and IMU (every ``viz_period_s``) and status (every ``status_period_s``) of
-        the state published at ``t`` (s) from its ``outputs``, stamped ``stamp_ns``."""
+    def _publish_side(self, tick: Tick) -> None:
+        """Odometry and IMU (every ``viz_period_s``) and status (every ``status_period_s``)
+        of the state just published."""
+        t = tick.t
         if t >= self._next_viz_s - 1e-12:
-            self.odom_pub.publish(self._odom_encoder.encode(outputs, stamp_ns))
-            self.imu_pub.publish(self._imu_encoder.encode(outputs, stamp_ns))
+            self.odom_pub.publish(self._odom_encoder.encode(tick.outputs, tick.stamp_ns))
+            self.imu_pub.publish(self._imu_encoder.encode(tick.outputs, tick.stamp_ns))
             self._next_viz_s = t + self._cfg["viz_period_s"]
         if t >= self._next_status_s - 1e-12:
-            self._publish_status(t, running=True)
+            self._publish_status(t)
             self._next_status_s = t + self._cfg["status_period_s"]
 
-    def lateness_percentile(self, q: float) -> float:
-        """Percentile ``q`` (0..100) of the realtime step lateness so far, s (bin upper edge;
-        0 before the first realtime step)."""
-        total = int(self.lateness_hist.sum())
-        if total == 0:
-            return 0.0
-        idx = int(np.searchsorted(np.cumsum(self.lateness_hist), q / 100.0 * total))
-        return (min(idx, LATENESS_BINS - 1) + 1) * LATENESS_BIN_S
-
-    def _publish_status(self, t: float, running: bool) -> None:
+    def _publish_status(self, t: float, final: bool = False) -> None:
+        book = self._book()
         msg = topics.message_class(topics.SIM_STATUS)()
         conversions.set_stamp(msg.header.stamp, max(t, 0.0))
         msg.clock_mode = self.clock_mode
         msg.sim_time_s = float(t)
-        msg.step_lateness_s = float(self.lateness_s)
-        msg.max_lateness_s = float(self.max_lateness_s)
-        msg.p99_lateness_s = self.lateness_percentile(99.0)
-        msg.steps = int(self.steps_done)
-        msg.overruns = int(self.overruns)
+        pacer = self.pacer
+        msg.step_lateness_s = float(pacer.lateness_s)
+        msg.max_lateness_s = float(pacer.max_lateness_s)
+        msg.p99_lateness_s = pacer.percentile(99.0)
+        msg.steps = int(self.engine.sim.step_count)
+        msg.overruns = int(pacer.overruns)
+        overruns = pacer.take_overruns()
+        msg.overrun_times_s = [o[0] for o in overruns]
+        msg.overrun_lateness_s = [o[1] for o in overruns]
         msg.stale_commands = int(self.stale_commands)
         msg.command_timed_out = bool(self.command_timed_out)
-        msg.running = running
+        msg.running = not (final or self.paused)
         msg.stop_reason = self.stop_reason
-        self.status_pub.publish(msg)
+        msg.end_reason = self.ended if final else ""
+        msg.waiting_for = self._waiting_for()
+        msg.driver_inputs_accepted = int(book.driver_inputs_accepted)
+        msg.commands_accepted = int(book.commands_accepted)
+        msg.late_commands = int(book.late_commands)
+        msg.final = final
+        reporting.publish_counted_status(self.status_pub, msg, self.counts, book.rejections)
+
+    def _waiting_for(self) -> str:
+        if self.ended:
+            return ""
+        if self.clock_mode == "lockstep":
+            if self._held is not None:
+                return f"recorder ({self._holding_back()})"
+            missing = self.answers.waiting_for
+            return {"driver input": "driver input (maneuver node)",
+                    "rear-steer command": "rear-steer command (controller node)"}.get(
+                        missing, missing.replace("driver input", "driver input (maneuver "
+                                                 "node)"))
+        age = self.engine.sim.time_s - self.rt_answers.driver_time_s
+        return "driver input (maneuver node)" if age > self._cfg["command_timeout_s"] else ""
 
     # -- realtime
     def _realtime_loop(self) -> None:
@@ -491,53 +543,46 @@ class SimulatorNode(Node):
             sys.setswitchinterval(old_interval)
 
     def _realtime_run(self) -> None:
-        dt = self.dt_s
-        timeout = float(self._cfg["command_timeout_s"])
-        t0 = time.perf_counter() - self.sim.time_s
+        engine, book, pacer = self.engine, self.rt_answers, self.pacer
+        sim = engine.sim
+        pacer.start(sim.time_s)
         k = 0
         rear = 0.0
-        while not self.paused and not self.finished:
-            deadline = t0 + self.sim.time_s
-            now = time.perf_counter()
-            if now < deadline:
-                time.sleep(deadline - now)
-                now = time.perf_counter()
-            late = now - deadline
-            self.lateness_s = late
-            self.lateness_hist[min(max(int(late / LATENESS_BIN_S), 0), LATENESS_BINS - 1)] += 1
-            if late > self.max_lateness_s:
-                self.max_lateness_s = late
-                self.max_lateness_at_s = self.sim.time_s
-            if late > dt:
-                self.overruns += 1
-                if len(self.overrun_log) < MAX_OVERRUN_LOG:
-                    self.overrun_log.append((self.sim.time_s, late))
-                t0 += late  # re-base: simulated time does not race to catch up
+        driver = book.driver
+        while not self.paused and not self.ended:
+            pacer.wait(sim.time_s)
             with self._lock:
                 if k % self.n_control == 0:
-                    t = self.sim.time_s
-                    if t - self.rear_cmd_time_s <= timeout:
-                        rear = self.rear_cmd_rad
-                        self.command_timed_out = False
-                    else:
-                        rear = 0.0
-                        if self.rear_cmd_step >= 0 or t > timeout:
-                            self.stale_commands += 1
-                            self.command_timed_out = True
-                if not self._integrate(rear, 1):
+                    t = sim.time_s
+                    rear, timed_out = book.rear_at(t, float(self._cfg["command_timeout_s"]))
+                    # at the start a controller gets one timeout to send its first command
+                    timed_out = timed_out and (book.commands_accepted > 0
+                                               or t > self._cfg["command_timeout_s"])
+                    self.stale_commands += timed_out
+                    self.command_timed_out = timed_out
+                    driver = book.driver
+                    quiet = t - max(book.driver_time_s, 0.0)
+                    if quiet > self._cfg["driver_timeout_s"]:
+                        self._end(f"no driver input for {quiet:.2f} s of simulation time at "
+                                  f"t = {t:.2f} s: the maneuver node stopped answering",
+                                  failed=True)
+                        return
+                if not engine.advance(driver, rear, n_steps=1):
+                    self._end(engine.diverged, failed=True)
                     return
                 k += 1
                 if k % self.n_state == 0:
-                    outputs = self.sim.outputs()
-                    t = float(outputs.get("sim_time_s", self.sim.time_s))
+                    tick = engine.tick
                     try:
-                        raw = self._state_encoder.encode(outputs, t, self.step_count)
-                    except NonFiniteError as exc:
-                        self._stop(f"non-finite state: {exc}")
+                        raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
+                    except conversions.NonFiniteError as exc:
+                        self._end(f"non-finite state at t = {tick.t:.4f} s: {exc}",
+                                  failed=True)
                         return
+                    book.published(tick)
                     self.state_pub.publish(raw)
-                    self.clock_pub.publish(cdr.encode_clock(t))
-                    self._publish_side(t, outputs, conversions.time_to_ns(t))
+                    self.clock_pub.publish(cdr.encode_clock(tick.t))
+                    self._publish_side(tick)
 
     def _stop_rt_thread(self) -> None:
         thread = self._rt_thread
@@ -547,37 +592,30 @@ class SimulatorNode(Node):
             self._started = False
 
     def on_shutdown(self, _executor: Any) -> None:
-        """Stop the realtime thread, publish the final status, log the timing."""
-        if self.clock_mode == "realtime" and self.steps_done:
-            self.get_logger().info(
-                f"realtime: {self.steps_done} steps, step lateness p99 "
-                f"{self.lateness_percentile(99.0) * 1e3:.3f} ms, max "
-                f"{self.max_lateness_s * 1e3:.3f} ms at t = {self.max_lateness_at_s:.3f} s, "
-                f"{self.overruns} overruns"
-                + (" (t/late ms: " + ", ".join(f"{t:.3f}/{late * 1e3:.2f}"
-                                               for t, late in self.overrun_log) + ")"
-                   if self.overrun_log else ""))
-        if self.clock_mode == "lockstep" and self.ticks_published > 1:
-            n = self.ticks_published - 1
-            self.get_logger().info(
-                f"lockstep: {n} ticks, mean answer wait {self.answer_wait_s / n * 1e3:.3f} ms, "
-                f"mean own work {self.tick_work_s / n * 1e3:.3f} ms per tick")
+        """Stop the realtime thread, publish the final status if the run did not end, log the
+        timing, and wait until every subscriber has what was published."""
         self.paused = True
         self._stop_rt_thread()
-        if not self.stop_reason:
-            self._publish_status(self.sim.time_s, running=False)
-
-
-@dataclasses.dataclass
-class _Tick:
-    """One lockstep state: its CDR bytes, the outputs it was made from, the exact simulation
-    time (s), the integration step and the header stamp (ns) the answers carry."""
-
-    raw: bytes
-    outputs: Any
-    t: float
-    step: int
-    stamp_ns: int
+        pacer = self.pacer
+        if self.clock_mode == "realtime" and self.engine.sim.step_count:
+            self.get_logger().info(
+                f"realtime: {self.engine.sim.step_count} steps, step lateness p99 "
+                f"{pacer.percentile(99.0) * 1e3:.3f} ms, max "
+                f"{pacer.max_lateness_s * 1e3:.3f} ms at t = {pacer.max_lateness_at_s:.3f} s, "
+                f"{pacer.overruns} overruns"
+                + (" (t/late ms: " + ", ".join(f"{t:.3f}/{late * 1e3:.2f}"
+                                               for t, late in pacer.first_overruns) + ")"
+                   if pacer.first_overruns else ""))
+        if self.clock_mode == "lockstep" and self.ticks:
+            self.get_logger().info(
+                f"lockstep: {self.ticks} ticks, mean answer wait "
+                f"{self.answer_wait_s / self.ticks * 1e3:.3f} ms, mean own work "
+                f"{self.tick_work_s / self.ticks * 1e3:.3f} ms per tick; waited for the "
+                f"recorder {self.window.holds} times, {self.held_s:.3f} s in all")
+        if not self.ended:
+            self.ended = "stopped before the maneuver was done (signal)"
+            self._publish_status(self.engine.tick.t, final=True)
+        reporting.wait_delivered(self.counts, self.get_logger())
 
 
 def _make_thread_realtime(priority: int, logger: Any) -> None:
@@ -597,15 +635,6 @@ def _make_thread_realtime(priority: int, logger: Any) -> None:
     except (PermissionError, OSError) as exc:
         logger.warning(f"realtime priority {priority} not granted ({exc}); running with normal "
                        "scheduling, expect more step lateness under load")
-
-
-def _whole_multiple(period_s: float, step_s: float, field: str) -> int:
-    ratio = period_s / step_s
-    n = int(round(ratio))
-    if n < 1 or abs(ratio - n) > 1e-9 * ratio:
-        raise ParameterError(field, f"must be a whole multiple of integration_step_s "
-                             f"({step_s} s), got {period_s} s")
-    return n
 
 
 def main(args: list[str] | None = None) -> int:

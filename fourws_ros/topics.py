@@ -1,68 +1,37 @@
-"""Topic names, message types and QoS profiles of the fourws graph, named once.
+"""QoS profiles of the fourws graph, on the names of :mod:`fourws_run.interface`.
 
-Every node, the launcher, the recorder and the replay take names and QoS from here. The
-offline bag tools (:mod:`fourws_analysis.bag`) spell the same names and types without rclpy;
-``test/test_ros_graph.py`` checks that both agree.
+Topic names, message types, frames and roles are defined once in :mod:`fourws_run.interface`
+(no rclpy there, so the bag tools read the same names); this module adds what only the ROS
+side needs: QoS profiles and the rclpy message classes. It re-exports the names so node code
+reads ``topics.STATE``.
 
 QoS choice (why):
 
-* ``STREAM_QOS`` (state, driver input, rear-steer command, odometry, IMU): reliable, keep last
-  :data:`STREAM_DEPTH`. Lockstep runs must not lose a single message (the simulator waits for the
-  answer to each state), and the recorder may lag the simulator for a while in a fast lockstep
-  run: a deep history lets it catch up instead of dropping.
-* ``STATUS_QOS`` (simulator and maneuver status): reliable, keep last 100 — events (``done``,
-  stop reasons) must arrive.
-* ``LATCHED_QOS`` (run configuration): reliable, transient local, depth 1 — a recorder that
-  joins late still gets it.
-* ``CLOCK_QOS``: reliable, keep last :data:`STREAM_DEPTH` for the recorder/replay; rclpy's own
-  time source subscribes best effort, which is compatible with a reliable publisher.
+* ``STREAM_QOS`` (state, driver input, rear-steer command, odometry, IMU, clock): reliable,
+  keep last :data:`STREAM_DEPTH`. Lockstep runs must not lose a single message: the simulator
+  waits for the answers to each state, and it never runs more than the flow-control window
+  (:data:`fourws_ros.node_params.RECORDER_WINDOW`, well below this depth) ahead of what the
+  recorder has stored, so no message can be pushed out of a queue before it is recorded.
+* ``STATUS_QOS`` (simulator, maneuver and recorder status): reliable, keep last
+  :data:`STATUS_DEPTH` -- the events (``done``, final counts) must arrive.
+* ``LATCHED_QOS`` (run and node configuration): reliable, transient local, depth 1 per
+  publisher -- a recorder that joins late still gets them.
 """
 
 from __future__ import annotations
 
-from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-NAMESPACE = "/fourws"
+from fourws_run.interface import (CLOCK, DRIVER_INPUT, FRAME_BODY, FRAME_ODOM, IMU,
+                                  LATCHED_TOPICS, MANEUVER_STATUS, NAMESPACE, NODE_CONFIG,
+                                  NODE_NAMES, ODOM, REAR_STEER_CMD, RECORDED_TOPICS,
+                                  RECORDER_STATUS, RUN_CONFIG, SIM_STATUS, SRV_PAUSE,
+                                  SRV_RESET, STATE, TOPIC_TYPES, Role)
 
-STATE = f"{NAMESPACE}/state"
-DRIVER_INPUT = f"{NAMESPACE}/driver_input"
-REAR_STEER_CMD = f"{NAMESPACE}/rear_steer_cmd"
-MANEUVER_STATUS = f"{NAMESPACE}/maneuver_status"
-SIM_STATUS = f"{NAMESPACE}/sim_status"
-ODOM = f"{NAMESPACE}/odom"
-IMU = f"{NAMESPACE}/imu"
-RUN_CONFIG = f"{NAMESPACE}/run_config"
-CLOCK = "/clock"
-#: Recorder -> simulator flow control in lockstep (``std_msgs/UInt64``: number of
-#: ``/fourws/state`` messages written so far). Not recorded.
-RECORDER_PROGRESS = f"{NAMESPACE}/recorder_progress"
-
-#: Services of the simulator (``std_srvs/srv/Trigger`` and ``std_srvs/srv/SetBool``).
-SRV_RESET = f"{NAMESPACE}/reset"
-SRV_PAUSE = f"{NAMESPACE}/pause"
-
-#: Message type of each topic, in rosbags/rosbag2 spelling ``package/msg/Name``.
-TOPIC_TYPES: dict[str, str] = {
-    STATE: "fourws_msgs/msg/VehicleState",
-    DRIVER_INPUT: "fourws_msgs/msg/DriverInput",
-    REAR_STEER_CMD: "fourws_msgs/msg/RearSteerCommand",
-    MANEUVER_STATUS: "fourws_msgs/msg/ManeuverStatus",
-    SIM_STATUS: "fourws_msgs/msg/SimulatorStatus",
-    ODOM: "nav_msgs/msg/Odometry",
-    IMU: "sensor_msgs/msg/Imu",
-    RUN_CONFIG: "std_msgs/msg/String",
-    CLOCK: "rosgraph_msgs/msg/Clock",
-    RECORDER_PROGRESS: "std_msgs/msg/UInt64",
-}
-
-#: Frames (REP-105): earth-fixed ``odom``, body ``base_link`` (x forward, y left, z up).
-FRAME_ODOM = "odom"
-FRAME_BODY = "base_link"
-
-#: History depth of the message streams (messages). 2000 is 2 s of a 1 kHz stream, or 1 s of
-#: a 20x lockstep run at 100 Hz: the longest stall of the recorder that loses nothing.
+#: History depth of the message streams (messages): 2 s of a 1 kHz stream.
 STREAM_DEPTH = 2000
-STATUS_DEPTH = 100
+#: History depth of the status topics (messages).
+STATUS_DEPTH = 1000
 
 STREAM_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STREAM_DEPTH,
                         reliability=ReliabilityPolicy.RELIABLE,
@@ -74,6 +43,12 @@ LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
 CLOCK_QOS = STREAM_QOS
+#: What a recorder subscribes latched topics with: transient local like the publishers, but a
+#: deep history, since several nodes publish on one latched topic (``/fourws/node_config``)
+#: and a depth-1 reader would keep only the last of them.
+LATCHED_RECORD_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STATUS_DEPTH,
+                                reliability=ReliabilityPolicy.RELIABLE,
+                                durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 #: QoS of every topic (publishers and subscribers use the same profile).
 TOPIC_QOS: dict[str, QoSProfile] = {
@@ -85,18 +60,22 @@ TOPIC_QOS: dict[str, QoSProfile] = {
     ODOM: STREAM_QOS,
     IMU: STREAM_QOS,
     RUN_CONFIG: LATCHED_QOS,
+    NODE_CONFIG: LATCHED_QOS,
     CLOCK: CLOCK_QOS,
-    RECORDER_PROGRESS: STATUS_QOS,
+    RECORDER_STATUS: STATUS_QOS,
 }
+assert set(TOPIC_QOS) == set(TOPIC_TYPES)
+assert all(TOPIC_QOS[t] is LATCHED_QOS for t in LATCHED_TOPICS)
 
 
 def message_class(topic: str) -> type:
-    """The rclpy message class of a graph topic (imports the generated module lazily).
+    """The rclpy message class of a graph topic (imports the generated module lazily, so a
+    missing interface package is reported by the node that needs it).
 
     Parameters
     ----------
     topic : str
-        One of the topic names above.
+        One of the topic names of :mod:`fourws_run.interface`.
 
     Raises
     ------
@@ -107,3 +86,10 @@ def message_class(topic: str) -> type:
 
     package, _, name = TOPIC_TYPES[topic].split("/")
     return getattr(importlib.import_module(f"{package}.msg"), name)
+
+
+__all__ = ["CLOCK", "CLOCK_QOS", "DRIVER_INPUT", "FRAME_BODY", "FRAME_ODOM", "IMU",
+           "LATCHED_QOS", "LATCHED_RECORD_QOS", "MANEUVER_STATUS", "NAMESPACE", "NODE_CONFIG", "NODE_NAMES", "ODOM",
+           "REAR_STEER_CMD", "RECORDED_TOPICS", "RECORDER_STATUS", "RUN_CONFIG", "Role",
+           "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATUS_DEPTH", "STATUS_QOS",
+           "STREAM_DEPTH", "STREAM_QOS", "TOPIC_QOS", "TOPIC_TYPES", "message_class"]

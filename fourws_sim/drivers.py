@@ -9,7 +9,7 @@ Drivers with internal state (the PI integrator of :class:`SpeedHoldDriver`, the 
 integrator of :class:`PreviewPathDriver`) advance *only* inside their ``command``/``steer``
 calls, by ``dt = t - t_previous`` of the times they are given (0 on the first call). Online
 (the maneuver node, called once per received state at the control rate) and offline
-(:func:`fourws_sim.closed_loop.run_closed_loop`) they are called with the same sequence of
+(:func:`fourws_run.closed_loop.run_closed_loop`) they are called with the same sequence of
 ``(t_k, outputs_k)``, so they produce the same commands bit for bit.
 
 Speed-hold driver
@@ -94,10 +94,8 @@ from typing import Any, Mapping, Protocol
 import numpy as np
 
 from fourws_sim.errors import ParameterError
-from fourws_sim.params import GRAVITY_MPS2, Vehicle, _from_mapping, _spec
+from fourws_sim.params import GRAVITY_MPS2, N_WHEELS, Vehicle, _from_mapping, _spec
 
-#: Number of wheels; order FL, FR, RL, RR everywhere.
-N_WHEELS = 4
 _FRONT_WHEELS = (0, 1)
 _REAR_WHEELS = (2, 3)
 _DRIVEN = {"front": _FRONT_WHEELS, "rear": _REAR_WHEELS, "all": (0, 1, 2, 3)}
@@ -543,7 +541,7 @@ def tracking_driver_spec_from(data: Any, source: str | None, prefix: str = "trac
 
 
 __all__ = [
-    "CirclePath", "DriverCommand", "N_WHEELS", "Path", "PathDriverSpec",
+    "CirclePath", "DriverCommand", "Path", "PathDriverSpec",
     "PathTrackingDriver", "PreviewPathDriver", "SplinePath", "SpeedHoldDriver", "SpeedHoldSpec",
     "TrackingDriverSpec", "path_driver_spec_from", "speed_hold_spec_from", "split_brake_torque",
     "tracking_driver_spec_from",

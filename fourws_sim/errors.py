@@ -49,5 +49,24 @@ class NonFiniteError(FourwsError):
     """A state, input or result is NaN or infinite."""
 
 
+class DivergedError(NonFiniteError):
+    """The simulated state became non-finite: the simulation diverged.
+
+    Not a user-input error but an outcome of the run (a car driven past what the model can
+    represent); runs report it with its time as their result (``fourws_run``).
+
+    Parameters
+    ----------
+    message : str
+        What diverged, and where.
+    time_s : float
+        Simulation time of the last finite state, s.
+    """
+
+    def __init__(self, message: str, time_s: float) -> None:
+        super().__init__(message)
+        self.time_s = time_s
+
+
 class IncompatibleError(FourwsError):
     """Two valid things that do not go together (e.g. a 3-DOF law on a 2-DOF model)."""

@@ -444,7 +444,7 @@ class ManeuverSpec:
     speed_hold: SpeedHoldSpec = field(default_factory=SpeedHoldSpec)
     path_driver: PathDriverSpec | None = None
     tracking_driver: TrackingDriverSpec | None = None
-    source: str = ""
+    source: str = field(default="", compare=False)
 
     def to_dict(self) -> dict[str, Any]:
         """The file layout as a plain mapping (round-trips through :func:`load_maneuver_spec`)."""
@@ -572,6 +572,7 @@ class Maneuver:
         self._random_index = np.empty(0)
         self._hold_after_brake_mps: float | None = None
         self._aborted = ""
+        self._end_condition = False
         if spec.type == "constant_radius":
             direction = 1 if p.direction == "left" else -1
             assert spec.path_driver is not None
@@ -700,6 +701,16 @@ class Maneuver:
         """Why the run ended early ('' if it did not)."""
         return self._aborted
 
+    @property
+    def end_kind(self) -> str:
+        """How the maneuver ended: ``completed`` (its duration), ``end_condition`` (the stop
+        criterion it is designed to reach, e.g. the ISO 4138 lateral-acceleration limit) or
+        ``aborted`` (the car or the driver could not do it: spun, left the path). Meaningful
+        once :meth:`done` is true."""
+        if not self._aborted:
+            return "completed"
+        return "end_condition" if self._end_condition else "aborted"
+
     def done(self, t: float, outputs: Mapping[str, Any] | None = None) -> bool:
         """True once the run may end: duration reached, or an end condition of the type."""
         if self._aborted:
@@ -712,6 +723,7 @@ class Maneuver:
         if kind == "slow_ramp_steer":
             if abs(float(outputs["lateral_accel_mps2"])) >= p.max_lateral_accel_mps2:
                 self._aborted = "lateral acceleration limit reached"
+                self._end_condition = True
             elif abs(float(outputs.get("sideslip_rad", 0.0))) > p.max_sideslip_rad:
                 self._aborted = "sideslip limit reached (the car spins)"
         elif kind == "constant_radius" and self._path_driver is not None:

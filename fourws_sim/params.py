@@ -55,6 +55,9 @@ CONFIG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "config"
 VEHICLE_DIR = CONFIG_DIR / "vehicles"
 
 GRAVITY_MPS2 = 9.80665
+#: Number of wheels of the vehicles fourws models; every per-wheel array is ordered FL, FR, RL,
+#: RR.
+N_WHEELS = 4
 
 
 def _spec(check: str = "positive", doc: str = "", default: Any = dataclasses.MISSING) -> Any:
@@ -267,7 +270,7 @@ class Vehicle:
     body: Body | None = None
     actuators: Actuators = field(default_factory=Actuators)
     description: str = ""
-    source: str = ""
+    source: str = field(default="", compare=False)
 
     def require(self, *subsystems: str, user: str = "this model") -> None:
         """Raise :class:`ParameterError` unless every named subsystem is present."""

@@ -28,16 +28,14 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from fourws_sim.errors import NonFiniteError, ParameterError
+from fourws_sim.errors import DivergedError, NonFiniteError, ParameterError
 from fourws_sim.integrators import DEFAULT_STEP_S, get_integrator
 from fourws_sim.models import get_model
-from fourws_sim.params import Vehicle, load_vehicle
+from fourws_sim.params import N_WHEELS, Vehicle, load_vehicle
 
 #: Forward speed of the linear models when :meth:`Simulator.reset` gets none, m/s: the
 #: paper's reference speed (85 km/h, chapters 4 and 8).
 DEFAULT_LINEAR_SPEED_MPS = 85.0 / 3.6
-#: Number of wheels (order FL, FR, RL, RR).
-N_WHEELS = 4
 #: Name of the nonlinear model that runs through compiled kernels.
 EIGHT_DOF = "8dof"
 #: dtype of the input vectors the compiled kernels take without conversion.
@@ -199,7 +197,7 @@ class Simulator:
         n = len(self.model.STATE)
         if arr.shape[0] != n:
             raise ParameterError("state", f"must have {n} components, got {arr.shape[0]}")
-        self._check_finite_state(arr)
+        self._check_finite_state(arr, integrated=False)
         self._x[:n] = arr
 
     @property
@@ -326,7 +324,7 @@ class Simulator:
                 x_new = self.integrator.advance(f, self._t, self._x, arr, self._mp,
                                                 self.dt_s, int(n_steps))
         except NonFiniteError as exc:
-            raise NonFiniteError(f"{self.model_name}: {exc}") from None
+            raise DivergedError(f"{self.model_name}: {exc}", self._t) from None
         self._check_finite_state(x_new)
         self._x = x_new
         self._step += int(n_steps)
@@ -356,16 +354,22 @@ class Simulator:
                                                    self._u, self._p, self.dt_s, 1)
         bad = np.flatnonzero(~np.isfinite(x_next))
         name = eightdof.STATE(int(bad[0])).name if bad.size else "unknown"
-        raise NonFiniteError(f"{self.model_name}: state {name} became non-finite at "
-                             f"t = {self._t:.6g} s (simulator kept the last finite state)")
+        raise DivergedError(f"{self.model_name}: state {name} became non-finite at "
+                            f"t = {self._t:.6g} s (simulator kept the last finite state)",
+                            self._t)
 
-    def _check_finite_state(self, x: np.ndarray) -> None:
+    def _check_finite_state(self, x: np.ndarray, integrated: bool = True) -> None:
+        """Raise on a non-finite state: :class:`DivergedError` for one the integration
+        produced, :class:`NonFiniteError` for one given by the caller."""
         if not np.isfinite(x).all():
             bad = int(np.flatnonzero(~np.isfinite(x))[0])
             n = len(self.model.STATE)
             name = self.model.STATE(bad).name if bad < n else ("X", "Y", "HEADING")[bad - n]
-            raise NonFiniteError(f"{self.model_name}: state {name} became non-finite near "
-                                 f"t = {self._t:.6g} s (simulator kept the last finite state)")
+            if not integrated:
+                raise NonFiniteError(f"state {name} is not finite ({x[bad]!r})")
+            raise DivergedError(f"{self.model_name}: state {name} became non-finite near "
+                                f"t = {self._t:.6g} s (simulator kept the last finite state)",
+                                self._t)
 
     def _has(self, name: str) -> bool:
         return name in self.model.STATE.__members__

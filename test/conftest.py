@@ -18,7 +18,7 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 @pytest.fixture
 def ros_domain(monkeypatch: pytest.MonkeyPatch):
     """Reserve a ROS domain ID for the test and export it (``ROS_DOMAIN_ID``)."""
-    from fourws_ros.launcher import reserve_domain_id
+    from fourws_ros.domains import reserve_domain_id
 
     lease = reserve_domain_id()
     monkeypatch.setenv("ROS_DOMAIN_ID", str(lease.domain_id))

@@ -74,28 +74,69 @@ def test_missing_bag_named(tmp_path: Path) -> None:
         B.load_bag(tmp_path / "nope")
 
 
-def test_truncated_bag_partial_or_clear_error(tmp_path: Path) -> None:
-    """A bag cut at 50 % (recorder killed) gives the messages of its complete chunks and a
-    warning; cut to its first 100 bytes it is an error naming the bag."""
+def test_truncated_bag_refused_or_read_up_to_its_damage(tmp_path: Path) -> None:
+    """A bag cut at 50 % (recorder killed) is refused, naming the damage; with
+    ``allow_incomplete`` it gives the messages of its complete chunks, flagged incomplete; cut
+    to its first 100 bytes nothing is readable: an error naming the bag."""
     _write_state_bag(tmp_path / "b", 20000, 1e-3)
     mcap = next((tmp_path / "b").glob("*.mcap"))
     data = mcap.read_bytes()
     mcap.write_bytes(data[: len(data) // 2])
-    run = B.load_bag(tmp_path / "b")
+    with pytest.raises(B.BagError, match=r"b' is incomplete or damaged: b.mcap damaged"):
+        B.load_bag(tmp_path / "b")
+    run = B.load_bag(tmp_path / "b", allow_incomplete=True)
     n = len(run.topics[B.TOPIC_STATE])
     assert 0 < n < 20000
-    assert run.warnings and "truncated" in run.warnings[0]
+    assert run.complete is False and "damaged" in run.warnings[0]
+    # the metadata's count disagrees with the file: named too
+    assert any("metadata.yaml says 20000 messages" in p for p in run.problems)
     # recovered messages are intact and in order
     np.testing.assert_allclose(run.topics[B.TOPIC_STATE].fields["yaw_rate_radps"],
                                np.sin(np.arange(n) * 1e-3), atol=1e-9)
     # a recorder killed by SIGKILL leaves no metadata.yaml either
     (tmp_path / "b" / "metadata.yaml").unlink()
-    run = B.load_bag(tmp_path / "b")
+    run = B.load_bag(tmp_path / "b", allow_incomplete=True)
     assert len(run.topics[B.TOPIC_STATE]) == n
     assert run.maneuver == "step_steer"
     mcap.write_bytes(data[:100])
-    with pytest.raises(B.BagError, match=r"cannot read bag .*b'.*truncated or corrupt"):
+    with pytest.raises(B.BagError, match=r"b' holds no readable message"):
+        B.load_bag(tmp_path / "b", allow_incomplete=True)
+
+
+def test_changed_byte_is_caught_by_the_checksum(tmp_path: Path) -> None:
+    """One overwritten yaw-rate value (8 bytes inside a chunk): the chunk CRC fails, the bag
+    is refused instead of giving a plausible wrong number; the values before that chunk are
+    what was written."""
+    _write_state_bag(tmp_path / "b", 2000, 1e-3)
+    mcap = next((tmp_path / "b").glob("*.mcap"))
+    data = bytearray(mcap.read_bytes())
+    value = np.float64(np.sin(1000 * 1e-3)).tobytes()  # message 1000's yaw rate
+    pos = data.find(value)
+    assert pos > 0
+    data[pos:pos + 8] = np.float64(45.9).tobytes()
+    mcap.write_bytes(bytes(data))
+    with pytest.raises(B.BagError, match=r"damaged.*(CRC|crc)"):
         B.load_bag(tmp_path / "b")
+    run = B.load_bag(tmp_path / "b", allow_incomplete=True)
+    yaw = run.topics[B.TOPIC_STATE].fields["yaw_rate_radps"]
+    assert 0 < yaw.size <= 1000 and 45.9 not in yaw
+    np.testing.assert_allclose(yaw, np.sin(np.arange(yaw.size) * 1e-3), atol=1e-9)
+
+
+def test_writer_accounting_makes_the_bag_complete(tmp_path: Path) -> None:
+    """A bag whose writer recorded its accounting loads as complete; one without it loads
+    with its completeness unknown and a warning saying so."""
+    from fourws_run.accounting import RunAccount, TopicAccount
+
+    _write_state_bag(tmp_path / "b", 10, 1e-3)
+    run = B.load_bag(tmp_path / "b")
+    assert run.complete is None and "not verified" in run.warnings[0]
+    with B.BagWriter(tmp_path / "c") as bag:
+        bag.write_run_config({"law": "fws"})
+        account = RunAccount({t: TopicAccount(t, n, n) for t, n in bag.counts.items()})
+        bag.set_accounting(account.to_dict(), account.complete)
+    run = B.load_bag(tmp_path / "c")
+    assert run.complete is True and not run.warnings
 
 
 def test_junk_file_is_clear_error(tmp_path: Path) -> None:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from fourws_control import make_law
-from fourws_sim.closed_loop import run_closed_loop
+from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.corridor import clearance
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import load_maneuver_spec
@@ -179,8 +179,8 @@ def test_slow_ramp_is_quasi_steady_and_stops_at_the_lateral_limit(car) -> None:
 
 
 def test_run_scenario_is_run_closed_loop_with_the_scenario_settings(car) -> None:
-    from fourws_sim.closed_loop import run_scenario
-    from fourws_sim.scenario import load_scenario
+    from fourws_run.closed_loop import run_scenario
+    from fourws_run.scenario import load_scenario
 
     scenario = load_scenario("default")
     res = run_scenario(scenario, "sol1")

@@ -12,7 +12,7 @@ import pytest
 from scipy import signal
 
 from fourws_control import available_laws
-from fourws_sim.closed_loop import run_closed_loop
+from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.corridor import MARGIN_BACKOFF_M, clearance, plan_corridor_path
 from fourws_sim.drivers import (CirclePath, PathDriverSpec, PathTrackingDriver,
                                 PreviewPathDriver, SpeedHoldDriver, SpeedHoldSpec, SplinePath,

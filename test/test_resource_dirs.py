@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from fourws_analysis.bag import MSG_DIR
+from fourws_run.bagfile import MSG_DIR
 from fourws_sim.params import CONFIG_DIR, find_resource_dir
 
 

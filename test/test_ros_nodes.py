@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fourws_analysis.bag import load_bag
+from fourws_analysis.bag import BagError, load_bag
 from fourws_ros import conversions, topics
+from fourws_run.bagfile import read_bag
 
 pytestmark = pytest.mark.usefixtures("ros_domain")
 
@@ -53,15 +54,22 @@ def _start_recorder(bag: Path, *extra: str) -> subprocess.Popen:
                             start_new_session=True)
 
 
-def _publish_states(n: int, rate_hz: float, ctx) -> None:
-    """Publish ``n`` VehicleState messages (step k, yaw rate k*1e-3, stamp k ms) at rate_hz."""
+def _publish_states(n: int, rate_hz: float, ctx, name: str = "state_source",
+                    final: bool = False) -> None:
+    """Publish ``n`` VehicleState messages (step k, yaw rate k*1e-3, stamp k ms) at rate_hz
+    from a node called ``name``; with ``final``, then a final SimulatorStatus with the counts
+    (what the simulator sends when a run ends)."""
     import rclpy
+    from rclpy.duration import Duration
 
-    node = rclpy.create_node("state_source", context=ctx)
+    node = rclpy.create_node(name, context=ctx)
     pub = node.create_publisher(topics.message_class(topics.STATE), topics.STATE,
                                 topics.STREAM_QOS)
+    status_pub = node.create_publisher(topics.message_class(topics.SIM_STATUS),
+                                       topics.SIM_STATUS, topics.STATUS_QOS)
     deadline = time.monotonic() + 30.0
-    while pub.get_subscription_count() < 1 and time.monotonic() < deadline:
+    while (pub.get_subscription_count() < 1 or final and status_pub.get_subscription_count() < 1
+           ) and time.monotonic() < deadline:
         time.sleep(0.01)
     assert pub.get_subscription_count() >= 1, "recorder did not subscribe"
     msg = topics.message_class(topics.STATE)()
@@ -73,13 +81,51 @@ def _publish_states(n: int, rate_hz: float, ctx) -> None:
         pub.publish(msg)
         while time.perf_counter() - t0 < (k + 1) / rate_hz:
             time.sleep(1e-4)
+    if final:
+        status = topics.message_class(topics.SIM_STATUS)()
+        status.published_topics = [topics.SIM_STATUS, topics.STATE]
+        status.published_counts = [1, n]
+        status.final = True
+        status.end_reason = "test"
+        status_pub.publish(status)
+        status_pub.wait_for_all_acked(Duration(seconds=10))
+    pub.wait_for_all_acked(Duration(seconds=10))
     node.destroy_node()
 
 
+_AS_SIMULATOR = ("-p", "simulator_node:=state_source",
+                 "-p", f"topics:=[{topics.STATE},{topics.SIM_STATUS}]")
+
+
 # ----------------------------------------------------------------------------- recorder
-def test_recorder_sigint_drains_and_finalizes(tmp_path, rclpy_context):
+def test_recorder_closes_complete_bag_when_the_run_ends(tmp_path, rclpy_context):
+    """States, then the simulator's final status with its counts: the recorder holds all 2001
+    messages, closes the bag by itself as complete and exits 0 (no signal needed)."""
     bag = tmp_path / "bag"
-    proc = _start_recorder(bag)
+    proc = _start_recorder(bag, *_AS_SIMULATOR)
+    try:
+        _publish_states(2000, 2000.0, rclpy_context, final=True)
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 0, out
+    assert b"complete" in out
+    run = load_bag(bag)
+    assert run.complete is True and not run.warnings
+    state = run.topics[topics.STATE]
+    assert len(state) == 2000
+    np.testing.assert_allclose(state.fields["yaw_rate_radps"], np.arange(2000) * 1e-3)
+    # bag times are the simulation stamps
+    np.testing.assert_allclose(state.time_s, np.arange(2000) * 1e-3, atol=1e-12)
+
+
+def test_recorder_sigint_drains_and_closes_incomplete(tmp_path, rclpy_context):
+    """SIGINT before the run ended: the recorder drains its queue, closes the bag with its
+    accounting (the publisher's final count never came) and exits 4; all 2000 states are
+    in the bag."""
+    bag = tmp_path / "bag"
+    proc = _start_recorder(bag, *_AS_SIMULATOR)
     try:
         _publish_states(2000, 2000.0, rclpy_context)
         proc.send_signal(signal.SIGINT)  # at once: the recorder must drain its queue first
@@ -87,21 +133,45 @@ def test_recorder_sigint_drains_and_finalizes(tmp_path, rclpy_context):
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-    assert proc.returncode == 0, out
+    assert proc.returncode == 4, out
     assert (bag / "metadata.yaml").is_file()
-    run = load_bag(bag)
-    state = run.topics[topics.STATE]
-    assert not run.warnings
-    assert len(state) == 2000
-    np.testing.assert_allclose(state.fields["yaw_rate_radps"], np.arange(2000) * 1e-3)
-    # bag times are the simulation stamps
-    np.testing.assert_allclose(state.time_s, np.arange(2000) * 1e-3, atol=1e-12)
+    with pytest.raises(BagError, match="final count is unknown"):
+        load_bag(bag)
+    run = load_bag(bag, allow_incomplete=True)
+    assert run.complete is False
+    assert len(run.topics[topics.STATE]) == 2000
 
 
-def test_recorder_sigkill_leaves_readable_bag(tmp_path, rclpy_context):
+def test_recorder_stores_nothing_from_a_foreign_publisher(tmp_path, rclpy_context):
+    """States from a node that is not the run's simulator are counted as foreign, not
+    stored."""
+    bag = tmp_path / "bag"
+    proc = _start_recorder(bag, *_AS_SIMULATOR)
+    try:
+        _publish_states(300, 2000.0, rclpy_context, name="rogue")
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert b"300 foreign messages not stored" in out
+    messages, check = read_bag(bag)
+    assert messages == []
+    meta = check.accounting
+    assert meta["topics"][topics.STATE]["stored"] == 0
+    assert meta["topics"][topics.STATE]["foreign"] == 300
+    assert meta["foreign_publishers"] == {f"{topics.STATE} from rogue": 300}
+
+
+def test_recorder_sigkill_leaves_repairable_bag(tmp_path, rclpy_context):
+    """SIGKILL: everything published a flush period before the kill is in complete chunks;
+    `fourws bag repair` rebuilds summary and metadata so rosbags opens it."""
+    from rosbags.rosbag2 import Reader
+
     bag = tmp_path / "bag"
     flush_s = 0.2
-    proc = _start_recorder(bag, "-p", f"flush_period_s:={flush_s}")
+    proc = _start_recorder(bag, "-p", f"flush_period_s:={flush_s}", *_AS_SIMULATOR)
     try:
         _publish_states(500, 1000.0, rclpy_context)
         time.sleep(5 * flush_s)  # several flushes after the last message
@@ -112,10 +182,17 @@ def test_recorder_sigkill_leaves_readable_bag(tmp_path, rclpy_context):
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == -signal.SIGKILL
     assert not (bag / "metadata.yaml").exists()  # it really died before closing
-    run = load_bag(bag)
+    run = load_bag(bag, allow_incomplete=True)
     state = run.topics[topics.STATE]
     assert len(state) == 500  # everything published a flush period before the kill
     np.testing.assert_allclose(state.fields["yaw_rate_radps"], np.arange(500) * 1e-3)
+    res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "bag", "repair", str(bag)],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 1, res.stderr  # repaired, and says it is still incomplete
+    assert "500" in res.stdout and "final" in res.stdout
+    with Reader(bag) as reader:
+        assert sum(1 for c, _, _ in reader.messages() if c.topic == topics.STATE) == 500
+    assert (bag / (next(bag.glob("*.mcap")).name + ".damaged")).is_file()
 
 
 def test_stamp_parsing_matches_messages():
@@ -237,12 +314,15 @@ def test_simulator_rejects_bad_commands_and_times_out_to_zero(lockstep_sim):
     assert s0.step == 0 and s0.sim_time_s == 0.0
     # a non-finite and an out-of-limit command are ignored: the simulator keeps waiting
     peer.answer(s0, math.nan)
-    peer.answer(s0, 10 * sim.rear_limit_rad)
+    peer.answer(s0, 10 * sim.limits.rear_angle_limit_rad)
     t_sent = time.monotonic()
     assert _spin_until(executor, lambda: len(peer.states) == 2, 10.0)
     waited = time.monotonic() - t_sent
     assert waited >= 0.3 - 0.05  # only the command timeout released the tick
-    assert sim.stale_commands == 3  # two rejected + one timed-out tick
+    assert sim.stale_commands == 1  # one timed-out tick
+    # (each answer() also sends a driver input: the second one for the same state is refused)
+    assert sim.rejections.counts == {f"{topics.REAR_STEER_CMD}: impossible values": 2,
+                                     f"{topics.DRIVER_INPUT}: second answer to one state": 1}
     s1 = peer.states[1]
     assert s1.step == sim.n_control
     # zero rear steer was applied over the period (8-DOF applied rear angle = command + roll
@@ -256,18 +336,19 @@ def test_simulator_rejects_bad_commands_and_times_out_to_zero(lockstep_sim):
 
 
 def test_simulator_stops_on_non_finite_state(lockstep_sim):
-    from fourws_sim.errors import NonFiniteError
+    from fourws_sim.errors import DivergedError
 
     sim, peer, executor = lockstep_sim
     assert _spin_until(executor, lambda: len(peer.states) == 1, 20.0)
 
     def diverge(*_args, **_kwargs):
-        raise NonFiniteError("state component R is not finite (test)")
+        raise DivergedError("state component R is not finite (test)", 0.0)
 
-    sim.sim.step = diverge
+    sim.engine.sim.step = diverge
     peer.answer(peer.states[0], 0.0)
     assert _spin_until(executor, lambda: sim.finished, 10.0)
-    assert "non-finite" in sim.stop_reason and "R is not finite" in sim.stop_reason
+    assert "diverged at t = 0.0000 s" in sim.stop_reason
+    assert "R is not finite" in sim.stop_reason
     assert _spin_until(executor, lambda: any(not s.running for s in peer.status), 5.0)
     final = [s for s in peer.status if not s.running][-1]
     assert final.stop_reason == sim.stop_reason

@@ -9,7 +9,7 @@ import yaml
 
 from fourws_sim.errors import ParameterError, UnknownNameError
 from fourws_sim.params import load_vehicle
-from fourws_sim.scenario import available_scenarios, load_scenario, scenario_from_mapping
+from fourws_run.scenario import available_scenarios, load_scenario, scenario_from_mapping
 
 
 def test_default_scenario_is_the_documented_run() -> None:

@@ -30,9 +30,13 @@ same order*. The sequence, with ``Tc`` the control period, ``dt`` the integratio
    angle, rear angle, steering torque, drive and brake torques of ``d_k``) held over the ``n``
    steps, then goes to 1.
 
-There is no other state: ROS nodes that keep one maneuver, one law and one actuator instance
-per run and call them in this order on the same values reproduce this runner bit for bit
-(message float64 fields carry Python floats unchanged).
+The sequence is run by the classes of :mod:`fourws_run.ticks` that the simulator node uses too
+(:class:`~fourws_run.ticks.TickEngine` integrates, :class:`~fourws_run.ticks.LockstepAnswers`
+accepts the answers of each tick with the same checks, so a driver input the simulator node
+would refuse is refused here as well). There is no other state: ROS nodes that keep one
+maneuver, one law and one actuator instance per run and call them in this order on the same
+values reproduce this runner bit for bit (message float64 fields carry Python floats
+unchanged).
 
 The result holds, per tick ``k`` (``N`` ticks): ``time_s``, every ``VehicleState`` output ``y_k``
 (wheel fields as ``(N, 4)`` arrays), the driver command ``d_k`` and the rear angles ``c_k``
@@ -47,25 +51,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from fourws_sim.drivers import DriverCommand, N_WHEELS
-from fourws_sim.errors import NonFiniteError, ParameterError
+from fourws_run.ticks import (InputLimits, LockstepAnswers, TickEngine, law_input,
+                              whole_multiple)
+from fourws_sim.drivers import DriverCommand
+from fourws_sim.errors import FourwsError, ParameterError
 from fourws_sim.maneuvers import Maneuver, ManeuverSpec, make_maneuver
-from fourws_sim.params import Vehicle
-
-#: Relative tolerance for "control period is a whole multiple of the integration step".
-_MULTIPLE_RTOL = 1e-9
-
-
-def simulator_inputs(command: DriverCommand, rear_angle_rad: float) -> Any:
-    """The :class:`fourws_sim.simulator.Inputs` of a driver command and a rear road-wheel
-    angle (rad, after the actuator); the simulator maps them to its model's input order."""
-    from fourws_sim.simulator import Inputs
-
-    return Inputs(front_wheel_angle_rad=command.front_wheel_angle_rad,
-                  rear_wheel_angle_rad=rear_angle_rad,
-                  steering_torque_nm=command.steering_torque_nm,
-                  drive_torque_nm=command.drive_torque_nm,
-                  brake_torque_nm=command.brake_torque_nm)
+from fourws_sim.params import N_WHEELS, Vehicle
 
 
 @dataclass
@@ -91,7 +82,8 @@ class ClosedLoopResult:
     law, model, vehicle, maneuver : str
         What ran.
     end_reason : str
-        ``duration`` or the maneuver's abort reason.
+        ``duration``, the maneuver's end or abort reason, ``max_ticks``, or ``the simulation
+        diverged at t = ...`` (:attr:`diverged`).
     config : dict
         The run configuration (vehicle, maneuver mapping, law, rates).
     """
@@ -109,6 +101,11 @@ class ClosedLoopResult:
     maneuver: str
     end_reason: str = "duration"
     config: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def diverged(self) -> bool:
+        """The simulation diverged (``end_reason`` says when and where)."""
+        return self.end_reason.startswith("the simulation diverged")
 
     def __getitem__(self, name: str) -> np.ndarray:
         """An output or driver array by field name (``res["yaw_rate_radps"]``)."""
@@ -129,19 +126,6 @@ def _numeric_fields(outputs: Mapping[str, Any]) -> list[str]:
         elif isinstance(value, (list, tuple, np.ndarray)) and len(value) == N_WHEELS:
             keys.append(key)
     return keys
-
-
-def law_input_from(outputs: Mapping[str, Any], command: DriverCommand, t_s: float) -> Any:
-    """The :class:`fourws_control.LawInput` of tick ``t_s`` (step 4 of the module docstring)."""
-    from fourws_control import LawInput
-
-    return LawInput(delta_f_rad=float(command.front_wheel_angle_rad),
-                    speed_mps=float(outputs["speed_mps"]),
-                    yaw_rate_radps=float(outputs["yaw_rate_radps"]),
-                    roll_rad=float(outputs["roll_rad"]),
-                    roll_rate_radps=float(outputs["roll_rate_radps"]),
-                    lateral_velocity_mps=float(outputs["lateral_velocity_mps"]),
-                    time_s=float(t_s))
 
 
 def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | Mapping[str, Any],
@@ -186,26 +170,24 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         Non-positive periods, or a control period that is not a whole multiple of ``dt_s``.
     UnknownNameError
         Unknown law, model or integrator.
-    NonFiniteError
-        The simulation diverged (raised by the simulator or the law).
+    ParameterError
+        The maneuver's driver input was refused by the simulator's input checks
+        (:class:`fourws_run.ticks.InputLimits`), as the simulator node refuses it.
+
+    A diverging simulation is not an error but the run's outcome: ``end_reason`` says where it
+    diverged and the result holds every tick before.
     """
     from fourws_control import RearSteerActuator, make_law
     from fourws_sim.simulator import Simulator
 
-    for key, value in (("dt_s", dt_s), ("control_period_s", control_period_s)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
-            raise ParameterError(key, f"must be a finite number > 0, got {value!r}")
-    ratio = control_period_s / dt_s
-    n_sub = int(round(ratio))
-    if n_sub < 1 or abs(ratio - n_sub) > _MULTIPLE_RTOL * ratio:
-        raise ParameterError("control_period_s",
-                             f"must be a whole multiple of dt_s ({dt_s} s), got "
-                             f"{control_period_s} s")
+    whole_multiple(control_period_s, dt_s, "control_period_s")
     belief = vehicle if belief_vehicle is None else belief_vehicle
     man = maneuver if isinstance(maneuver, Maneuver) else make_maneuver(maneuver, vehicle)
 
     sim = Simulator(vehicle, model=model, integrator=integrator, dt_s=dt_s, tire=tire)
     sim.reset(speed_mps=man.initial_speed_mps)
+    engine = TickEngine(sim, control_period_s)
+    answers = LockstepAnswers(InputLimits.for_vehicle(vehicle))
     law = make_law(law_name, belief, **dict(law_options or {}))
     actuator = RearSteerActuator(belief)
 
@@ -218,26 +200,41 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     end_reason = "duration"
     limit = max_ticks if max_ticks is not None else int(
         math.ceil(man.duration_s / control_period_s)) + 1
-    y = sim.outputs()
+    tick = engine.tick
     for _ in range(limit):
-        t = float(y["sim_time_s"]) if "sim_time_s" in y else float(sim.time_s)
+        t, y = tick.t, tick.outputs
         if man.done(t, y):
             end_reason = man.abort_reason or "duration"
             break
+        answers.expect(tick)
+        # the maneuver node's answer ...
         d = man.command(t, y)
-        c = law.rear_angle(law_input_from(y, d, t))
-        delta_r = actuator.apply(c, control_period_s)
+        if not answers.offer_driver(tick.stamp_ns, d):
+            raise ParameterError("maneuver", f"driver input refused at t = {t:.3f} s: "
+                                 f"{answers.rejections.last}", man.spec.source or man.name)
+        # ... and the controller node's (a law error leaves the tick without a command: zero
+        # rear steer, as the simulator does when the controller does not answer)
+        try:
+            c = law.rear_angle(law_input(y, d.front_wheel_angle_rad))
+            delta_r = actuator.apply(c, control_period_s)
+            answers.offer_command(tick.step, tick.stamp_ns, delta_r)
+        except FourwsError:
+            c = math.nan
+        d, applied, _timed_out = answers.close()
         times.append(t)
         rows.append({key: (np.array(v) if isinstance(v, np.ndarray) else v)
                      for key, v in y.items()})
         commands.append(d)
         law_cmds.append(c)
-        rear.append(delta_r)
+        rear.append(applied)
         phases.append(man.phase(t))
-        sim.step(simulator_inputs(d, delta_r), n_steps=n_sub)
-        y = sim.outputs()
+        if not engine.advance(d, applied):
+            end_reason = engine.diverged
+            break
+        tick = engine.tick
     else:
         end_reason = "max_ticks"
+    y = tick.outputs
 
     if not rows:
         raise ParameterError("duration_s", "the maneuver ended before the first tick",
@@ -251,8 +248,6 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         "drive_torque_nm": np.array([d.drive_torque_nm for d in commands]),
         "brake_torque_nm": np.array([d.brake_torque_nm for d in commands]),
     }
-    if not all(np.all(np.isfinite(v)) for v in outputs.values()):
-        raise NonFiniteError(f"closed loop {law_name}/{man.name}: non-finite output")
     config = {
         "vehicle": vehicle.to_dict(), "belief_vehicle": belief.name, "maneuver": man.to_dict(),
         "law": law_name, "law_options": dict(law_options or {}), "model": model, "tire": tire,
@@ -267,7 +262,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
 
 
 def run_scenario(scenario: Any, law_name: str | None = None) -> ClosedLoopResult:
-    """Run one law of a :class:`fourws_sim.scenario.Scenario` offline (its first law by
+    """Run one law of a :class:`fourws_run.scenario.Scenario` offline (its first law by
     default): the reference a lockstep run of the node graph with the same scenario matches.
 
     Raises
@@ -288,5 +283,4 @@ def run_scenario(scenario: Any, law_name: str | None = None) -> ClosedLoopResult
                            law_options=scenario.law_options.get(law))
 
 
-__all__ = ["ClosedLoopResult", "law_input_from", "run_closed_loop", "run_scenario",
-           "simulator_inputs"]
+__all__ = ["ClosedLoopResult", "run_closed_loop", "run_scenario"]

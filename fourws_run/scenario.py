@@ -23,6 +23,9 @@ A scenario file (``config/scenarios/<name>.yaml``)::
       enabled: true
       output_dir: runs            # relative to the working directory
       topics: all                 # or a list of topic names
+    controller:                   # optional: your own controller node instead of fourws's
+      command: [python3, my_controller.py]   # started with the run's ROS environment
+      name: fourws_controller     # its ROS node name (the launcher remaps it to this)
 
 :func:`load_scenario` validates everything it can without building the run: names of the model,
 tire, integrator and laws are checked against their registries, the maneuver is loaded and
@@ -34,24 +37,24 @@ validated, periods must be whole multiples of the integration step. Errors are
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-
+from fourws_control.registry import LAWS
+from fourws_run.config import ControllerSpec
+from fourws_run.ticks import whole_multiple
 from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.integrators import INTEGRATORS
 from fourws_sim.maneuvers import ManeuverSpec, load_maneuver_spec, maneuver_spec_from_mapping
+from fourws_sim.models import MODELS
 from fourws_sim.params import (CONFIG_DIR, Tire, Vehicle, available_configs, load_vehicle,
                                read_yaml, resolve_config_path)
+from fourws_sim.tires import TIRES
 
 SCENARIO_DIR = CONFIG_DIR / "scenarios"
 CLOCK_MODES = ("lockstep", "realtime")
-#: Relative tolerance for "period is a whole multiple of the integration step".
-_MULTIPLE_RTOL = 1e-9
-_TIRE_NAMES = ("linear", "sti", "magic_formula")
-_INTEGRATOR_NAMES = ("rk4", "solve_ivp")
 
 
 @dataclass(frozen=True)
@@ -99,8 +102,9 @@ class Scenario:
     state_period_s: float = 1e-2
     belief: BeliefSpec = field(default_factory=BeliefSpec)
     recording: RecordingSpec = field(default_factory=RecordingSpec)
+    controller: ControllerSpec = field(default_factory=ControllerSpec)
     description: str = ""
-    source: str = ""
+    source: str = field(default="", compare=False)
 
     def build_vehicle(self) -> Vehicle:
         """The simulated vehicle, with the tire override applied."""
@@ -133,12 +137,14 @@ class Scenario:
             "recording": {"enabled": rec.enabled, "output_dir": rec.output_dir,
                           "topics": rec.topics if isinstance(rec.topics, str)
                           else list(rec.topics)},
+            "controller": {"command": list(self.controller.command),
+                           "name": self.controller.node_name},
         }
 
 
 _FIELDS = ("name", "description", "vehicle", "maneuver", "laws", "law_options", "model", "tire",
            "integrator", "clock_mode", "integration_step_s", "control_period_s",
-           "state_period_s", "belief", "recording")
+           "state_period_s", "belief", "recording", "controller")
 
 
 def _number(data: Mapping[str, Any], key: str, default: float, source: str,
@@ -162,21 +168,8 @@ def _string(data: Mapping[str, Any], key: str, default: str | None, source: str,
     return value
 
 
-def _check_multiple(period: float, step: float, key: str, source: str) -> None:
-    ratio = period / step
-    if ratio < 1.0 - _MULTIPLE_RTOL or abs(ratio - round(ratio)) > _MULTIPLE_RTOL * ratio:
-        raise ParameterError(key, f"must be a whole multiple of integration_step_s ({step} s), "
-                             f"got {period} s", source)
-
-
 def _known_models() -> list[str]:
-    from fourws_sim.models import MODELS
     return sorted(set(MODELS) | {"8dof"})
-
-
-def _known_laws() -> list[str]:
-    registry = importlib.import_module("fourws_control.registry")
-    return list(registry.LAWS)
 
 
 def scenario_from_mapping(data: Any, source: str = "<mapping>",
@@ -217,7 +210,7 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
             or not all(isinstance(x, str) for x in laws_data):
         raise ParameterError("laws", f"must be a non-empty list of law names, got {laws_data!r}",
                              source)
-    known_laws = _known_laws()
+    known_laws = list(LAWS)
     for law in laws_data:
         if law not in known_laws:
             raise UnknownNameError("law", law, known_laws)
@@ -233,11 +226,11 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     if model not in _known_models():
         raise UnknownNameError("model", str(model), _known_models())
     tire = _string(data, "tire", None, source, allow_none=True)
-    if tire is not None and tire not in _TIRE_NAMES:
-        raise UnknownNameError("tire", tire, list(_TIRE_NAMES))
+    if tire is not None and tire not in TIRES:
+        raise UnknownNameError("tire", tire, list(TIRES))
     integrator = _string(data, "integrator", "rk4", source)
-    if integrator not in _INTEGRATOR_NAMES:
-        raise UnknownNameError("integrator", str(integrator), list(_INTEGRATOR_NAMES))
+    if integrator not in INTEGRATORS:
+        raise UnknownNameError("integrator", str(integrator), list(INTEGRATORS))
     clock = _string(data, "clock_mode", "lockstep", source)
     if clock not in CLOCK_MODES:
         raise ParameterError("clock_mode", f"must be one of {', '.join(CLOCK_MODES)}, "
@@ -245,8 +238,8 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     step = _number(data, "integration_step_s", 1e-3, source)
     control = _number(data, "control_period_s", 1e-2, source)
     state = _number(data, "state_period_s", 1e-2, source)
-    _check_multiple(control, step, "control_period_s", source)
-    _check_multiple(state, step, "state_period_s", source)
+    whole_multiple(control, step, "control_period_s", source)
+    whole_multiple(state, step, "state_period_s", source)
 
     belief_data = data.get("belief") or {}
     if not isinstance(belief_data, Mapping):
@@ -286,12 +279,13 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
                                  source)
         topics = tuple(topics)
 
+    controller = ControllerSpec.from_mapping(data.get("controller"), source)
     return Scenario(
         name=str(name), vehicle=str(vehicle), maneuver=maneuver, laws=tuple(laws_data),
         law_options={k: dict(v) for k, v in law_options.items()}, model=str(model), tire=tire,
         integrator=str(integrator), clock_mode=str(clock), integration_step_s=step,
         control_period_s=control, state_period_s=state, belief=belief,
-        recording=RecordingSpec(enabled, str(output_dir), topics),
+        recording=RecordingSpec(enabled, str(output_dir), topics), controller=controller,
         description=str(data.get("description", "")), source=source)
 
 

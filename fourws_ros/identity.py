@@ -1,0 +1,64 @@
+"""Who published a message: the publishing node's name, from rclpy message info and the graph.
+
+rclpy hands a subscription callback that takes two arguments the message info, which holds the
+publisher's GID (``publisher_gid``) and its publication sequence number. The ROS graph maps
+every publisher GID to its node (``get_publishers_info_by_topic``). The recorder and the
+launcher use this to take messages only from the run's own nodes.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def publisher_gid(info: Any) -> bytes:
+    """The publisher GID (16 bytes) of rclpy message info (``b""`` if it has none)."""
+    gid = info.get("publisher_gid") if isinstance(info, dict) else None
+    if not gid:
+        return b""
+    return bytes(gid.get("data", b""))[:16]
+
+
+class PublisherNames:
+    """Node names of publishers by GID, looked up in the ROS graph of ``node`` and cached.
+
+    A publisher whose node the graph does not know yet (discovery still running) gives None;
+    ask again later. A GID is a 12-byte participant prefix and a 4-byte entity id; every
+    fourws process has one participant, so a publisher the graph cannot name any more (its
+    node is gone, its last messages still queued) is named after the single node its
+    participant was seen with.
+    """
+
+    def __init__(self, node: Any) -> None:
+        self._node = node
+        self._names: dict[bytes, str] = {}
+        self._participants: dict[bytes, set[str]] = {}
+
+    def refresh(self, *topics: str) -> None:
+        """Learn the publishers of ``topics`` now. Call it regularly while the publishers
+        live: once a node is gone the graph no longer names its publishers, yet its last
+        messages may still be waiting to be taken."""
+        for topic in topics:
+            for info in self._node.get_publishers_info_by_topic(topic):
+                node_name = info.node_name
+                if node_name and not node_name.startswith("_"):  # _NODE_NAME_UNKNOWN_
+                    gid = bytes(info.endpoint_gid)[:16]
+                    self._names[gid] = node_name
+                    self._participants.setdefault(gid[:12], set()).add(node_name)
+
+    def name(self, topic: str, gid: bytes) -> str | None:
+        """Node name of publisher ``gid`` on ``topic`` (None if not known yet)."""
+        name = self._names.get(gid)
+        if name is None:
+            self.refresh(topic)
+            name = self._names.get(gid)
+        if name is None and len(self._participants.get(gid[:12], ())) == 1:
+            (name,) = self._participants[gid[:12]]
+        return name
+
+    def of(self, topic: str, info: Any) -> str | None:
+        """Node name of the publisher of a message received with ``info``."""
+        return self.name(topic, publisher_gid(info))
+
+
+__all__ = ["PublisherNames", "publisher_gid"]

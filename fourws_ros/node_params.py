@@ -1,0 +1,120 @@
+"""The ROS parameters of each node of a run, from its :class:`~fourws_run.config.RunConfig`.
+
+:func:`node_parameters` is the only translation from a run description to node parameters;
+:func:`write_params_file` writes them as one ROS 2 parameter file (the run's ``params.yaml``),
+which is what a graph started by hand uses too (``config/params/lockstep.yaml`` is such a file).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from fourws_ros import topics
+from fourws_run.config import RunConfig
+
+Role = topics.Role
+NODE_NAMES = topics.NODE_NAMES
+#: Lockstep flow control: the simulator runs at most this many messages of any recorded topic
+#: ahead of what the recorder has stored (0.5 s of simulated time at 100 Hz). Far below the
+#: stream history depth, so no message can leave a queue before the recorder takes it; and
+#: small enough that all topics together stay within the middleware's shared-memory port
+#: queue (512 messages by default), whose overflow would cost a retransmission after the
+#: writer's next heartbeat (seconds).
+RECORDER_WINDOW = 50
+
+
+def dumps_config(config: dict[str, Any]) -> str:
+    """JSON text of a configuration mapping (numpy values and paths made plain)."""
+    def default(obj: Any) -> Any:
+        if hasattr(obj, "tolist"):
+            return obj.tolist()
+        if isinstance(obj, Path):
+            return str(obj)
+        raise TypeError(f"not JSON serializable: {type(obj).__name__}")
+    return json.dumps(config, default=default, sort_keys=True)
+
+
+def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[str, Any]]:
+    """``ros__parameters`` of every node of the run, keyed by ROS node name."""
+    lockstep = config.lockstep
+    records = bag_path is not None and bool(config.recorded_topics)
+    controller = config.controller.node_name
+    gate = {"integration_step_s": config.integration_step_s,
+            "state_period_s": config.state_interval_s, "clock_mode": config.clock_mode}
+    # the vehicle as a whole mapping (tire override applied): the run's vehicle may be one no
+    # file holds (a study's scaled mass, a belief with scaled cornering stiffness)
+    vehicle = {"vehicle": config.vehicle.name,
+               "vehicle_json": dumps_config(config.vehicle.to_dict())}
+    params: dict[str, dict[str, Any]] = {
+        NODE_NAMES[Role.SIMULATOR]: {
+            **vehicle, "model": config.model, "integrator": config.integrator,
+            "integration_step_s": config.integration_step_s,
+            "control_period_s": config.control_period_s,
+            "state_period_s": config.state_period_s,
+            "clock_mode": config.clock_mode,
+            "initial_speed_mps": config.speed_mps,
+            "autostart": False,
+            "expected_state_subscribers": (2 + int(records)) if lockstep else 0,
+            "recorder_window": RECORDER_WINDOW if lockstep and records else 0,
+        },
+        NODE_NAMES[Role.MANEUVER]: {
+            "maneuver_json": dumps_config(config.maneuver.to_dict()),
+            **vehicle, **gate,
+        },
+        controller: {
+            "law": config.law,
+            "law_options_json": dumps_config(dict(config.law_options)),
+            **vehicle, "belief_vehicle_json": dumps_config(config.belief.to_dict()),
+            # the controller is called once per published state: in lockstep once per
+            # control period, in realtime once per state period -- the interval of its rate
+            # limit
+            "control_period_s": config.state_interval_s,
+            # lockstep: the driver input of every tick comes (the run ends when it does not)
+            "driver_wait_s": 0.0 if lockstep else 0.5,
+            **gate,
+        },
+    }
+    if records:
+        params[NODE_NAMES[Role.RECORDER]] = {
+            "bag_path": str(bag_path), "topics": list(config.recorded_topics),
+            "controller_node": controller}
+    return params
+
+
+def write_params_file(path: Path, node_params: dict[str, dict[str, Any]]) -> Path:
+    """Write a ROS 2 parameter file ``{node: {ros__parameters: {...}}}`` (YAML).
+
+    Raises
+    ------
+    OSError
+        The file cannot be written.
+    """
+    import yaml
+
+    data = {node: {"ros__parameters": params} for node, params in node_params.items()}
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def expected_endpoints(config: RunConfig, recorded: bool) -> list[tuple[str, str, str]]:
+    """``(topic, "pub"|"sub", node name)`` that must be in the graph before the run starts."""
+    sim, man = NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER]
+    ctrl = config.controller.node_name
+    expected = [
+        (topics.STATE, "pub", sim), (topics.STATE, "sub", man), (topics.STATE, "sub", ctrl),
+        (topics.DRIVER_INPUT, "pub", man), (topics.DRIVER_INPUT, "sub", sim),
+        (topics.REAR_STEER_CMD, "pub", ctrl), (topics.REAR_STEER_CMD, "sub", sim),
+    ]
+    if config.controller.builtin:
+        expected.append((topics.DRIVER_INPUT, "sub", ctrl))
+    if recorded:
+        rec = NODE_NAMES[Role.RECORDER]
+        expected += [(t, "sub", rec) for t in config.recorded_topics]
+        expected.append((topics.RECORDER_STATUS, "sub", sim))
+    return expected
+
+
+__all__ = ["RECORDER_WINDOW", "dumps_config", "expected_endpoints", "node_parameters",
+           "write_params_file"]

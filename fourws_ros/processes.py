@@ -1,0 +1,260 @@
+"""The node processes of a run: start, watch, stop -- without orphans.
+
+Each node runs as its own OS process in its own process group, with a log file. Shutdown is by
+process group: SIGINT, then SIGTERM after ``grace_s``, then SIGKILL. Children also get SIGTERM
+from the kernel if the launcher itself dies (``PR_SET_PDEATHSIG``), so neither Ctrl-C, a
+crashing node nor a killed launcher leaves orphans; a stopped (SIGSTOP) node is continued so
+it can handle the signal.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+from fourws_ros.runtime import EXIT_INCOMPLETE, EXIT_RUN_STOPPED, EXIT_USER_ERROR
+
+_PR_SET_PDEATHSIG = 1
+#: How many lines of a failed node's log the launcher repeats.
+LOG_TAIL_LINES = 15
+
+
+def _child_setup() -> None:
+    """In the child before exec: die with the parent (SIGTERM)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+
+
+def set_fifo(pid: int, priority: int) -> bool:
+    """SCHED_FIFO ``priority`` for every thread of process ``pid``; False if not permitted
+    (no CAP_SYS_NICE) -- the process then keeps normal scheduling. Speed only: nothing in a
+    run's correctness depends on it."""
+    try:
+        tids = [int(t) for t in os.listdir(f"/proc/{pid}/task")]
+        for tid in tids:
+            os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(priority))
+    except (OSError, ValueError):
+        return False
+    return True
+
+
+def node_command(node: str, params_file: Path | None = None,
+                 params: dict[str, Any] | None = None,
+                 node_name: str | None = None) -> list[str]:
+    """Command line that runs fourws node ``node`` with a parameter file and overrides."""
+    cmd = [sys.executable, "-m", "fourws_cli.main", "node", node]
+    return cmd + ros_args(params_file, params, node_name)
+
+
+def ros_args(params_file: Path | None = None, params: dict[str, Any] | None = None,
+             node_name: str | None = None) -> list[str]:
+    """``--ros-args`` of a node: node name remap, parameter file, parameter overrides."""
+    args = ["--ros-args"]
+    if node_name:
+        args += ["-r", f"__node:={node_name}"]
+    if params_file is not None:
+        args += ["--params-file", str(params_file)]
+    for key, value in (params or {}).items():
+        args += ["-p", f"{key}:={_param_text(value)}"]
+    return args
+
+
+def user_command(command: tuple[str, ...] | list[str]) -> list[str]:
+    """A user's controller command made runnable: a ``.py`` file that is not executable runs
+    with this Python (the one with rclpy and fourws_msgs)."""
+    cmd = list(command)
+    if cmd and cmd[0].endswith(".py") and not os.access(cmd[0], os.X_OK):
+        cmd.insert(0, sys.executable)
+    return cmd
+
+
+def _param_text(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ",".join(_param_text(v) for v in value) + "]"
+    return str(value)
+
+
+@dataclass
+class Child:
+    """One node process."""
+
+    name: str
+    cmd: list[str]
+    log_path: Path
+    proc: subprocess.Popen[bytes] | None = None
+
+    def alive(self) -> bool:
+        """True while the process runs."""
+        return self.proc is not None and self.proc.poll() is None
+
+    def exit_code(self) -> int | None:
+        """The exit code (None while it runs)."""
+        return None if self.proc is None else self.proc.poll()
+
+    def log_tail(self, lines: int = LOG_TAIL_LINES) -> str:
+        """Last ``lines`` lines of the node's log."""
+        try:
+            text = self.log_path.read_text(errors="replace").splitlines()
+        except OSError:
+            return ""
+        return "\n".join(text[-lines:])
+
+
+def describe_exit(child: Child, with_log: bool = True) -> str:
+    """Why ``child`` ended, and the tail of its log."""
+    code = child.exit_code()
+    if code == EXIT_USER_ERROR:
+        what = "refused its configuration"
+    elif code == EXIT_RUN_STOPPED:
+        what = "stopped the run"
+    elif code == EXIT_INCOMPLETE:
+        what = "closed an incomplete bag"
+    elif code is not None and code < 0:
+        what = f"was killed by {signal.Signals(-code).name}"
+    else:
+        what = f"exited with code {code}"
+    text = f"node {child.name} {what} (log {child.log_path})"
+    tail = child.log_tail() if with_log else ""
+    return f"{text}:\n{tail}" if tail else text
+
+
+class ProcessGroup:
+    """Starts, watches and stops the node processes of one run.
+
+    Parameters
+    ----------
+    log_dir : Path
+        Folder for one log file per node.
+    env : dict
+        Environment of the node processes (:func:`fourws_ros.domains.graph_env`).
+    echo : callable
+        Where progress lines go.
+    grace_s : float
+        Time a node gets after SIGINT (and again after SIGTERM) before escalation, s.
+    """
+
+    def __init__(self, log_dir: Path, env: dict[str, str], echo: Callable[[str], None],
+                 grace_s: float = 5.0) -> None:
+        self.log_dir = Path(log_dir)
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.env = dict(env)
+        # a user's `python my_controller.py` finds this environment's Python first
+        bin_dir = str(Path(sys.executable).parent)
+        self.env["PATH"] = bin_dir + os.pathsep + self.env.get("PATH", "")
+        self.children: list[Child] = []
+        self.grace_s = grace_s
+        self.echo = echo
+        self.started_at = time.monotonic()
+
+    def start(self, name: str, cmd: list[str]) -> Child:
+        """Start ``cmd`` as node process ``name`` (own process group, log file).
+
+        Raises
+        ------
+        OSError
+            The program cannot be run (not found, not executable).
+        """
+        if not self.children:
+            self.started_at = time.monotonic()
+        log_path = self.log_dir / f"{name}.log"
+        if shutil.which(cmd[0], path=self.env.get("PATH")) is None and not Path(cmd[0]).is_file():
+            raise FileNotFoundError(f"{cmd[0]!r}: command not found")
+        child = Child(name, cmd, log_path)
+        with open(log_path, "wb") as log:
+            child.proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                          stdin=subprocess.DEVNULL, env=self.env,
+                                          start_new_session=True, preexec_fn=_child_setup)
+        self.children.append(child)
+        return child
+
+    def child(self, name: str) -> Child:
+        """The child process called ``name``."""
+        for c in self.children:
+            if c.name == name:
+                return c
+        raise KeyError(name)
+
+    def has(self, name: str) -> bool:
+        """Whether a child called ``name`` was started."""
+        return any(c.name == name for c in self.children)
+
+    def failed(self) -> Child | None:
+        """A child that exited with a non-zero code, if any (exiting with 0 is how nodes end
+        at the end of a run)."""
+        for child in self.children:
+            code = child.exit_code()
+            if code not in (None, 0):
+                return child
+        return None
+
+    def wait_exit(self, names: Iterable[str], timeout_s: float,
+                  poll: Callable[[float], None]) -> list[str]:
+        """Wait until the named children exit on their own; the names still running after
+        ``timeout_s`` (``poll(seconds)`` is called meanwhile, e.g. to spin ROS)."""
+        names = [n for n in names if self.has(n)]
+        deadline = time.monotonic() + timeout_s
+        while True:
+            running = [n for n in names if self.child(n).alive()]
+            if not running or time.monotonic() > deadline:
+                return running
+            poll(0.05)
+
+    def stop(self, names: Iterable[str] | None = None,
+             grace_s: float | None = None) -> dict[str, int | None]:
+        """Stop children (in the given order, default reverse start order) by process group;
+        returns the exit codes."""
+        order = ([self.child(n) for n in names if self.has(n)] if names is not None
+                 else list(reversed(self.children)))
+        return {child.name: self._stop_one(child, self.grace_s if grace_s is None else grace_s)
+                for child in order}
+
+    def _stop_one(self, child: Child, grace_s: float) -> int | None:
+        proc = child.proc
+        if proc is None:
+            return None
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+            if proc.poll() is not None:
+                break
+            try:
+                os.killpg(proc.pid, sig)
+                os.killpg(proc.pid, signal.SIGCONT)  # a stopped node must run to handle it
+            except ProcessLookupError:
+                break
+            try:
+                proc.wait(timeout=grace_s)
+            except subprocess.TimeoutExpired:
+                self.echo(f"  {child.name} ignored {signal.Signals(sig).name}, escalating")
+        # members of the group that outlived the leader
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+        return proc.wait()
+
+    def exit_codes(self) -> dict[str, int | None]:
+        """Exit code of every child (None while running)."""
+        return {c.name: c.exit_code() for c in self.children}
+
+    def kill_all(self) -> None:
+        """SIGKILL every child process group at once (last resort)."""
+        for child in self.children:
+            if child.proc is not None:
+                try:
+                    os.killpg(child.proc.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+                child.proc.wait()
+
+
+__all__ = ["Child", "LOG_TAIL_LINES", "ProcessGroup", "describe_exit", "node_command",
+           "ros_args", "set_fifo", "user_command"]

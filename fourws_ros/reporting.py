@@ -1,0 +1,113 @@
+"""What every fourws node reports about itself: counted publishers, the node's configuration,
+the accounting fields of the status messages, and delivery before exit.
+
+The recorder can only call a bag complete if it knows what was sent: every publishing node
+counts its messages per topic (:class:`PublishCounts`) and puts the counts, its own status
+included, into its status messages (:func:`fill_accounting`); the final status carries the
+final counts. Before a node exits it waits until every subscriber has acknowledged what it
+published (:func:`wait_delivered`), so no message dies with the process.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Mapping
+
+from fourws_ros import topics
+from fourws_run.ticks import Rejections
+
+#: How long a stopping node waits for its subscribers to acknowledge everything, s.
+DELIVERY_TIMEOUT_S = 30.0
+
+
+class CountingPublisher:
+    """An rclpy publisher that counts what it publishes (into a shared :class:`PublishCounts`)."""
+
+    __slots__ = ("pub", "_counts", "topic")
+
+    def __init__(self, pub: Any, counts: dict[str, int], topic: str) -> None:
+        self.pub = pub
+        self._counts = counts
+        self.topic = topic
+
+    def publish(self, msg: Any) -> None:
+        """Publish ``msg`` (a message or serialized CDR bytes) and count it."""
+        self.pub.publish(msg)
+        self._counts[self.topic] += 1
+
+    def get_subscription_count(self) -> int:
+        """Matched subscriptions (rclpy's)."""
+        return int(self.pub.get_subscription_count())
+
+
+class PublishCounts:
+    """Per-topic counts of everything one node publishes."""
+
+    def __init__(self) -> None:
+        self.counts: dict[str, int] = {}
+        self.publishers: list[CountingPublisher] = []
+
+    def publisher(self, node: Any, topic: str) -> CountingPublisher:
+        """A counted publisher of graph topic ``topic`` with the topic's QoS."""
+        pub = node.create_publisher(topics.message_class(topic), topic, topics.TOPIC_QOS[topic])
+        self.counts.setdefault(topic, 0)
+        counted = CountingPublisher(pub, self.counts, topic)
+        self.publishers.append(counted)
+        return counted
+
+
+def publish_node_config(node: Any, counts: PublishCounts, role: topics.Role,
+                        config: Mapping[str, Any]) -> CountingPublisher:
+    """Publish what this node runs with on ``/fourws/node_config`` (latched, one message):
+    ``{"node": name, "role": role, "config": {...}}``; returns the publisher (keep it alive)."""
+    pub = counts.publisher(node, topics.NODE_CONFIG)
+    msg = topics.message_class(topics.NODE_CONFIG)()
+    msg.data = json.dumps({"node": node.get_name(), "role": role.value, "config": dict(config)},
+                          sort_keys=True, default=_plain)
+    pub.publish(msg)
+    return pub
+
+
+def _plain(obj: Any) -> Any:
+    if hasattr(obj, "tolist"):
+        return obj.tolist()
+    return str(obj)
+
+
+def fill_accounting(msg: Any, counts: Mapping[str, int], rejections: Rejections) -> None:
+    """Set the accounting fields of a ``SimulatorStatus`` or ``ManeuverStatus`` (the status
+    itself must already be counted: call this with its count incremented)."""
+    names = sorted(counts)
+    msg.published_topics = names
+    msg.published_counts = [int(counts[t]) for t in names]
+    reasons = sorted(rejections.counts)
+    msg.rejected_reasons = reasons
+    msg.rejected_counts = [int(rejections.counts[r]) for r in reasons]
+    msg.last_rejection = rejections.last
+
+
+def publish_counted_status(pub: CountingPublisher, msg: Any, counts: PublishCounts,
+                           rejections: Rejections) -> None:
+    """Publish a status message whose accounting includes the message itself."""
+    counts.counts[pub.topic] += 1
+    fill_accounting(msg, counts.counts, rejections)
+    pub.pub.publish(msg)
+
+
+def wait_delivered(counts: PublishCounts, logger: Any,
+                   timeout_s: float = DELIVERY_TIMEOUT_S) -> bool:
+    """Wait until every matched subscriber acknowledged every message published; False (and
+    an error logged, naming the topic) if one did not within ``timeout_s``."""
+    from rclpy.duration import Duration
+
+    ok = True
+    for counted in counts.publishers:
+        if not counted.pub.wait_for_all_acked(Duration(seconds=timeout_s)):
+            logger.error(f"{counted.topic}: not every subscriber acknowledged the "
+                         f"{counts.counts[counted.topic]} messages within {timeout_s:.0f} s")
+            ok = False
+    return ok
+
+
+__all__ = ["CountingPublisher", "DELIVERY_TIMEOUT_S", "PublishCounts", "fill_accounting",
+           "publish_counted_status", "publish_node_config", "wait_delivered"]

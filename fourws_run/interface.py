@@ -1,0 +1,143 @@
+"""The interface of the fourws graph, named once: topics, message types, frames, roles.
+
+Everything that crosses a process boundary is spelled here and nowhere else: the ROS layer
+(:mod:`fourws_ros.topics` adds QoS profiles to these names), the recorder, the bag reader and
+writer, the codecs and the run accounting all import it. It imports no rclpy, so the offline
+tools and the tests read the same names.
+
+Roles
+-----
+A run has one node per :class:`Role`. Each topic has the roles that may publish it
+(:data:`WRITER_ROLES`); a message on a topic from any other publisher does not belong to the
+run (the recorder does not store it, it is counted as foreign).
+"""
+
+from __future__ import annotations
+
+import enum
+
+from fourws_sim.params import N_WHEELS
+
+NAMESPACE = "/fourws"
+
+STATE = f"{NAMESPACE}/state"
+DRIVER_INPUT = f"{NAMESPACE}/driver_input"
+REAR_STEER_CMD = f"{NAMESPACE}/rear_steer_cmd"
+MANEUVER_STATUS = f"{NAMESPACE}/maneuver_status"
+SIM_STATUS = f"{NAMESPACE}/sim_status"
+ODOM = f"{NAMESPACE}/odom"
+IMU = f"{NAMESPACE}/imu"
+#: The whole run description (``std_msgs/String``, JSON of :class:`fourws_run.config.RunConfig`),
+#: latched, published by the launcher of ``fourws run``.
+RUN_CONFIG = f"{NAMESPACE}/run_config"
+#: What each node runs with (``std_msgs/String``, JSON ``{"node", "role", "config"}``), latched,
+#: one message per node: a graph started by hand is self-describing too.
+NODE_CONFIG = f"{NAMESPACE}/node_config"
+CLOCK = "/clock"
+#: Recorder progress and accounting (``fourws_msgs/RecorderStatus``); lockstep flow control.
+#: Not recorded.
+RECORDER_STATUS = f"{NAMESPACE}/recorder_status"
+
+#: Services of the simulator (``std_srvs/srv/Trigger`` and ``std_srvs/srv/SetBool``).
+SRV_RESET = f"{NAMESPACE}/reset"
+SRV_PAUSE = f"{NAMESPACE}/pause"
+
+#: ROS package of the fourws message definitions (``msg/*.msg``).
+MSG_PACKAGE = "fourws_msgs"
+
+#: Message type of each topic, in rosbag2 spelling ``package/msg/Name``.
+TOPIC_TYPES: dict[str, str] = {
+    STATE: f"{MSG_PACKAGE}/msg/VehicleState",
+    DRIVER_INPUT: f"{MSG_PACKAGE}/msg/DriverInput",
+    REAR_STEER_CMD: f"{MSG_PACKAGE}/msg/RearSteerCommand",
+    MANEUVER_STATUS: f"{MSG_PACKAGE}/msg/ManeuverStatus",
+    SIM_STATUS: f"{MSG_PACKAGE}/msg/SimulatorStatus",
+    ODOM: "nav_msgs/msg/Odometry",
+    IMU: "sensor_msgs/msg/Imu",
+    RUN_CONFIG: "std_msgs/msg/String",
+    NODE_CONFIG: "std_msgs/msg/String",
+    CLOCK: "rosgraph_msgs/msg/Clock",
+    RECORDER_STATUS: f"{MSG_PACKAGE}/msg/RecorderStatus",
+}
+#: Topics whose messages are latched (transient local): a late subscriber still gets them.
+LATCHED_TOPICS = (RUN_CONFIG, NODE_CONFIG)
+#: Topics recorded by default: every graph topic but ``/clock`` (it repeats the state stamps)
+#: and the recorder's own status.
+RECORDED_TOPICS: tuple[str, ...] = tuple(t for t in TOPIC_TYPES
+                                         if t not in (CLOCK, RECORDER_STATUS))
+
+#: Frames (REP-105): earth-fixed ``odom``, body ``base_link`` (x forward, y left, z up).
+FRAME_ODOM = "odom"
+FRAME_BODY = "base_link"
+
+#: Wheel count and order of every per-wheel field (FL, FR, RL, RR).
+WHEELS = ("FL", "FR", "RL", "RR")
+assert len(WHEELS) == N_WHEELS
+
+#: Scalar float fields of ``VehicleState`` taken from ``Simulator.outputs()``, message order.
+STATE_SCALARS = ("x_m", "y_m", "heading_rad", "speed_mps", "lateral_velocity_mps",
+                 "yaw_rate_radps", "roll_rad", "roll_rate_radps", "sideslip_rad",
+                 "longitudinal_accel_mps2", "lateral_accel_mps2", "front_wheel_angle_rad",
+                 "rear_wheel_angle_rad")
+#: Per-wheel (``float64[4]``) fields of ``VehicleState``, message order.
+STATE_WHEELS = ("wheel_speed_radps", "normal_load_n", "slip_angle_rad", "slip_ratio", "fx_n",
+                "fy_n", "mz_nm")
+
+
+class Role(str, enum.Enum):
+    """The nodes of a run."""
+
+    SIMULATOR = "simulator"
+    MANEUVER = "maneuver"
+    CONTROLLER = "controller"
+    RECORDER = "recorder"
+    LAUNCHER = "launcher"
+
+
+#: Default ROS node name of each role (a user controller may take another name).
+NODE_NAMES: dict[Role, str] = {
+    Role.SIMULATOR: "fourws_simulator",
+    Role.MANEUVER: "fourws_maneuver",
+    Role.CONTROLLER: "fourws_controller",
+    Role.RECORDER: "fourws_recorder",
+    Role.LAUNCHER: "fourws_launcher",
+}
+
+#: The roles that publish each topic; anything else on the topic is foreign to the run.
+WRITER_ROLES: dict[str, tuple[Role, ...]] = {
+    STATE: (Role.SIMULATOR,),
+    ODOM: (Role.SIMULATOR,),
+    IMU: (Role.SIMULATOR,),
+    SIM_STATUS: (Role.SIMULATOR,),
+    CLOCK: (Role.SIMULATOR,),
+    DRIVER_INPUT: (Role.MANEUVER,),
+    MANEUVER_STATUS: (Role.MANEUVER,),
+    REAR_STEER_CMD: (Role.CONTROLLER,),
+    RUN_CONFIG: (Role.LAUNCHER,),
+    NODE_CONFIG: (Role.SIMULATOR, Role.MANEUVER, Role.CONTROLLER),
+    RECORDER_STATUS: (Role.RECORDER,),
+}
+assert set(WRITER_ROLES) == set(TOPIC_TYPES)
+
+#: Topics whose publishers report their published counts in their status messages (the
+#: simulator's ``SimulatorStatus`` and the maneuver's ``ManeuverStatus``); the controller's
+#: count is its publisher's sequence number (:mod:`fourws_run.accounting`).
+SIMULATOR_COUNTED = (STATE, ODOM, IMU, SIM_STATUS, NODE_CONFIG)
+MANEUVER_COUNTED = (DRIVER_INPUT, MANEUVER_STATUS, NODE_CONFIG)
+
+NS_PER_S = 1_000_000_000
+
+
+def time_to_ns(time_s: float) -> int:
+    """Simulation time in s -> integer ns (rounded): the ``header.stamp`` of a message."""
+    return int(round(float(time_s) * NS_PER_S))
+
+
+__all__ = [
+    "CLOCK", "DRIVER_INPUT", "FRAME_BODY", "FRAME_ODOM", "IMU", "LATCHED_TOPICS",
+    "MANEUVER_COUNTED", "MANEUVER_STATUS", "MSG_PACKAGE", "NAMESPACE", "NODE_CONFIG",
+    "NODE_NAMES", "NS_PER_S", "N_WHEELS", "ODOM", "REAR_STEER_CMD", "RECORDED_TOPICS",
+    "RECORDER_STATUS", "RUN_CONFIG", "Role", "SIMULATOR_COUNTED", "SIM_STATUS", "SRV_PAUSE",
+    "SRV_RESET", "STATE", "STATE_SCALARS", "STATE_WHEELS", "TOPIC_TYPES", "WHEELS",
+    "WRITER_ROLES", "time_to_ns",
+]
