@@ -73,21 +73,25 @@ _CHECKS = {
 }
 
 
+def _check_value(value: Any, f: dataclasses.Field, name: str, source: str | None) -> float:
+    """``value`` as a float if it passes the range check of field ``f``, else ParameterError
+    naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(name, f"must be a number, got {value!r}", source)
+    value = float(value)
+    if not math.isfinite(value):
+        raise ParameterError(name, f"must be finite, got {value!r}", source)
+    ok, msg = _CHECKS[f.metadata["check"]]
+    if not ok(value):
+        raise ParameterError(name, f"{msg}, got {value!r}", source)
+    return value
+
+
 def _validate_dataclass(obj: Any, source: str | None, prefix: str) -> None:
     for f in dataclasses.fields(obj):
-        check = f.metadata.get("check")
-        if check is None:
+        if f.metadata.get("check") is None:
             continue
-        value = getattr(obj, f.name)
-        name = f"{prefix}{f.name}"
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ParameterError(name, f"must be a number, got {value!r}", source)
-        value = float(value)
-        if not math.isfinite(value):
-            raise ParameterError(name, f"must be finite, got {value!r}", source)
-        ok, msg = _CHECKS[check]
-        if not ok(value):
-            raise ParameterError(name, f"{msg}, got {value!r}", source)
+        value = _check_value(getattr(obj, f.name), f, f"{prefix}{f.name}", source)
         object.__setattr__(obj, f.name, value)
 
 
@@ -109,6 +113,8 @@ def _expand_shorthands(cls: type, data: Mapping[str, Any], source: str | None,
                                  f"sets {' and '.join(targets)}; give either it or "
                                  f"{both[0]}, not both", source)
         value = out.pop(key)
+        _check_value(value, next(f for f in dataclasses.fields(cls) if f.name == targets[0]),
+                     f"{prefix}{key}", source)  # an error names the key the file has
         for target in targets:
             out[target] = value
     return out
