@@ -14,7 +14,9 @@ A vehicle file (``config/vehicles/<name>.yaml``) is a mapping with one key per s
 
 The same mapping may also sit under ``/**: ros__parameters: vehicle:`` (a ROS 2 parameter
 file); :func:`load_vehicle` accepts both layouts. All values are SI (kg, m, s, rad, N);
-the unit is part of every field name.
+the unit is part of every field name. A subsystem may declare file shorthands
+(``SHORTHANDS``): ``tire.relaxation_length_m`` sets ``relaxation_length_front_m`` and
+``relaxation_length_rear_m`` (one sigma for both axles, as the paper gives it).
 
 Which subsystems a model needs is checked by the model (``Vehicle.require``), so a 2-DOF data
 set with no roll data is a valid vehicle that a 3-DOF model refuses with a clear message.

@@ -240,8 +240,8 @@ V_MIN_DEFAULT_MPS = 1.0
 #: braking or cornering; the rate bounds below leave room above it).
 SPIN_LOAD_FACTOR = 1.5
 #: Largest |lambda h| of a sub-step h for the fastest slip mode lambda: RK4's stability
-#: interval on the negative real axis is 2.785, explicit Euler's 2; both bounds keep a margin
-#: of about 1.9 for loads beyond SPIN_LOAD_FACTOR and for the wheel's coupling to the body.
+#: interval on the negative real axis is 2.785, explicit Euler's 2; the bounds keep a factor
+#: of 1.9 and 2 for loads beyond SPIN_LOAD_FACTOR and for the wheel's coupling to the body.
 RK4_RATE_BOUND = 1.5
 EULER_RATE_BOUND = 1.0
 #: Most sub-steps a step may take; a vehicle and step that would need more at standstill are
@@ -419,6 +419,10 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
     c_s = max(_longitudinal_stiffness(module, coeffs_f, fz_max, arr[P.MU]),
               _longitudinal_stiffness(module, coeffs_r, fz_max, arr[P.MU]))
     arr[P.K_SPIN] = bd.wheel_radius_m ** 2 * c_s / bd.wheel_spin_inertia_kgm2
+    if not math.isfinite(arr[P.K_SPIN]):
+        raise ParameterError("body.wheel_spin_inertia_kgm2",
+                             f"{bd.wheel_spin_inertia_kgm2!r} kg m^2 is too small to integrate "
+                             f"(R^2 C_s / I_w overflows)", vehicle.source or vehicle.name)
     if v_min_mps is None:
         v_min_mps = V_MIN_DEFAULT_MPS
     if not (math.isfinite(v_min_mps) and v_min_mps > 0.0):
@@ -447,7 +451,7 @@ def substeps(slip_rate_per_s: float, dt_s: float, integrator: str = "rk4") -> in
     """Number of equal sub-steps the compiled loops split a step of ``dt_s`` s into when the
     fastest slip mode has the rate ``slip_rate_per_s`` (1/s): the smallest n with
     ``rate dt / n <= bound`` (:func:`rate_bound`), at most :data:`MAX_SUBSTEPS`. The kernels
-    compute the same number (``test_eightdof`` checks it)."""
+    compute the same number (``test_eightdof_slip`` checks it)."""
     ratio = slip_rate_per_s * dt_s / rate_bound(integrator)
     if ratio <= 1.0:
         return 1

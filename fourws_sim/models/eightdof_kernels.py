@@ -16,6 +16,12 @@ phase; it must give exactly the numbers of four ``forces`` calls (``test_eightdo
 checks bit equality). Parameter-only terms are computed once per kernel call, and divisions
 by parameters are multiplications by their reciprocals: the results equal the plain scalar
 code's to round-off (``test_eightdof_regression`` pins trajectories of the model to 1e-12).
+
+Sub-steps: ``rhs`` also reports the rate of the fastest slip mode (aux slot ``_AUX_RATE``);
+the RK4 and Euler loops read it from their first stage and split the step into
+``eightdof.substeps`` equal sub-steps where the step would be too long for it (a light or
+slowly rolling wheel). With one sub-step (normal driving) the arithmetic is that of a plain
+step, bit for bit; the per-step cost of the check is a comparison.
 """
 
 from __future__ import annotations
