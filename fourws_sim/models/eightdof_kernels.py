@@ -18,10 +18,10 @@ by parameters are multiplications by their reciprocals: the results equal the pl
 code's to round-off (``test_eightdof_regression`` pins trajectories of the model to 1e-12).
 
 Sub-steps: ``rhs`` also reports the rate of the fastest slip mode (aux slot ``_AUX_RATE``);
-the RK4 and Euler loops read it from their first stage and split the step into
-``eightdof.substeps`` equal sub-steps where the step would be too long for it (a light or
-slowly rolling wheel). With one sub-step (normal driving) the arithmetic is that of a plain
-step, bit for bit; the per-step cost of the check is a comparison.
+the RK4 and Euler loops read it from their first stage and, where the step is too long for it
+(a light or slowly rolling wheel), take the step in ``eightdof.substeps`` equal sub-steps in a
+separate compiled function. In normal driving the arithmetic is that of a plain step, bit for
+bit, and the check costs a comparison per step.
 """
 
 from __future__ import annotations
@@ -421,14 +421,52 @@ def _substeps(rate, dt_over_bound):  # type: ignore[no-untyped-def]
 _substeps_inline = _jit_inline(_substeps)
 
 
+def _rk4_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
+    """One RK4 step of ``dt`` in ``n_sub`` equal sub-steps, in place (the rare path: a light or
+    slowly rolling wheel); False, with ``x`` restored to the step's start, if a state became
+    non-finite. Calls the compiled right-hand side (not inlined: the first compile stays as
+    fast as before)."""
+    xt = work[_XT]
+    x0 = work[_X0]
+    for j in range(N_STATE):
+        x0[j] = x[j]
+    h = dt / n_sub
+    half = 0.5 * h
+    sixth = h / 6.0
+    for _ in range(n_sub):
+        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
+        for stage in range(1, 4):
+            hs = h if stage == 3 else half
+            kp = work[stage - 1]
+            for j in range(N_STATE):
+                xt[j] = x[j] + hs * kp[j]
+            _rhs_called(xt, u, q, pt, cf, cr, work[stage], aux)
+        k1 = work[_K1]
+        k2 = work[_K2]
+        k3 = work[_K3]
+        k4 = work[_K4]
+        ok = True
+        for j in range(N_STATE):
+            xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+            if not math.isfinite(xt[j]):
+                ok = False
+        if not ok:
+            for j in range(N_STATE):
+                x[j] = x0[j]
+            return False
+        for j in range(N_STATE):
+            x[j] = xt[j]
+    return True
+
+
 def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     """``n`` RK4 steps in place; returns the number of finite steps done.
 
-    Each step is taken in as many equal sub-steps as the fastest slip mode of its starting
-    state needs (``_substeps``; one in normal driving, then the arithmetic is exactly that of
-    a plain RK4 step). With ``u_held`` (the simulator's fast path: one compiled call per
-    tick), ``u`` is first checked and copied into ``u_held`` (:func:`_take_input`); -1 and no
-    step if it fails.
+    A step whose starting state has a slip mode too fast for ``dt`` (``_substeps`` > 1) is
+    taken in that many equal sub-steps (:func:`_rk4_substeps`); otherwise (normal driving)
+    the arithmetic is that of a plain RK4 step. With ``u_held`` (the simulator's fast path:
+    one compiled call per tick), ``u`` is first checked and copied into ``u_held``
+    (:func:`_take_input`); -1 and no step if it fails.
     """
     if u_held is not None:
         if not _take_input_inline(u, u_held):
@@ -436,61 +474,76 @@ def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     work = np.empty((6, N_STATE))
     aux = np.empty(N_AUX)
     xt = work[_XT]
-    x0 = work[_X0]
     pt = _parameter_terms_inline(q)
     half = 0.5 * dt
     sixth = dt / 6.0
     dt_over_bound = dt / RK4_BOUND
     for step in range(n):
+        # one inlined right-hand side for the four stages (stage s starts from
+        # x + h_s k_{s-1} with h = dt/2, dt/2, dt); a loop over the four, as LLVM does not
+        # unroll it into four copies of the right-hand side (first compile time)
         n_sub = 1
-        h_full = dt
-        h_half = half
-        h_sixth = sixth
-        sub = 0
-        while sub < n_sub:
-            # one inlined right-hand side for the four stages (stage s starts from
-            # x + h_s k_{s-1} with h = h/2, h/2, h)
-            for stage in range(4):
-                if stage == 0:
-                    _rhs_inline(x, u, q, pt, cf, cr, work[_K1], aux)
-                    if sub == 0:
-                        n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
-                        if n_sub > 1:
-                            h_full = dt / n_sub
-                            h_half = 0.5 * h_full
-                            h_sixth = h_full / 6.0
-                            for j in range(N_STATE):
-                                x0[j] = x[j]
-                else:
-                    h = h_full if stage == 3 else h_half
-                    kp = work[stage - 1]
-                    for j in range(N_STATE):
-                        xt[j] = x[j] + h * kp[j]
-                    _rhs_inline(xt, u, q, pt, cf, cr, work[stage], aux)
-            k1 = work[_K1]
-            k2 = work[_K2]
-            k3 = work[_K3]
-            k4 = work[_K4]
-            ok = True
-            for j in range(N_STATE):
-                xt[j] = x[j] + h_sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-                if not math.isfinite(xt[j]):
-                    ok = False
-            if not ok:
-                if sub > 0:
-                    for j in range(N_STATE):
-                        x[j] = x0[j]
+        for stage in range(4):
+            if stage == 0:
+                _rhs_inline(x, u, q, pt, cf, cr, work[_K1], aux)
+                n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
+                if n_sub > 1:
+                    break
+            else:
+                h = dt if stage == 3 else half
+                kp = work[stage - 1]
+                for j in range(N_STATE):
+                    xt[j] = x[j] + h * kp[j]
+                _rhs_inline(xt, u, q, pt, cf, cr, work[stage], aux)
+        if n_sub > 1:
+            if not _rk4_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
                 return step
-            for j in range(N_STATE):
-                x[j] = xt[j]
-            sub += 1
+            continue
+        k1 = work[_K1]
+        k2 = work[_K2]
+        k3 = work[_K3]
+        k4 = work[_K4]
+        ok = True
+        for j in range(N_STATE):
+            xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+            if not math.isfinite(xt[j]):
+                ok = False
+        if not ok:
+            return step
+        for j in range(N_STATE):
+            x[j] = xt[j]
     return n
 
 
+def _euler_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
+    """One explicit-Euler step of ``dt`` in ``n_sub`` equal sub-steps (as
+    :func:`_rk4_substeps`)."""
+    k1 = work[0]
+    xt = work[1]
+    x0 = work[2]
+    for j in range(N_STATE):
+        x0[j] = x[j]
+    h = dt / n_sub
+    for _ in range(n_sub):
+        _rhs_called(x, u, q, pt, cf, cr, k1, aux)
+        ok = True
+        for j in range(N_STATE):
+            xt[j] = x[j] + h * k1[j]
+            if not math.isfinite(xt[j]):
+                ok = False
+        if not ok:
+            for j in range(N_STATE):
+                x[j] = x0[j]
+            return False
+        for j in range(N_STATE):
+            x[j] = xt[j]
+    return True
+
+
 def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
-    """``n`` explicit-Euler steps in place, in sub-steps as :func:`rk4` (bound
-    ``EULER_RATE_BOUND``); returns the number of finite steps done (the same ``u_held``
-    option as :func:`rk4`)."""
+    """``n`` explicit-Euler steps in place, in sub-steps where the state needs them (bound
+    ``EULER_RATE_BOUND``, :func:`_euler_substeps`); returns the number of finite steps done
+    (the same ``u_held`` option as :func:`rk4`)."""
     if u_held is not None:
         if not _take_input_inline(u, u_held):
             return -1
@@ -498,36 +551,28 @@ def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     aux = np.empty(N_AUX)
     k1 = work[0]
     xt = work[1]
-    x0 = work[2]
     pt = _parameter_terms_inline(q)
     dt_over_bound = dt / EULER_BOUND
     for step in range(n):
-        n_sub = 1
-        h = dt
-        sub = 0
-        while sub < n_sub:
-            _rhs_called(x, u, q, pt, cf, cr, k1, aux)
-            if sub == 0:
-                n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
-                if n_sub > 1:
-                    h = dt / n_sub
-                    for j in range(N_STATE):
-                        x0[j] = x[j]
-            ok = True
-            for j in range(N_STATE):
-                xt[j] = x[j] + h * k1[j]
-                if not math.isfinite(xt[j]):
-                    ok = False
-            if not ok:
-                if sub > 0:
-                    for j in range(N_STATE):
-                        x[j] = x0[j]
+        _rhs_called(x, u, q, pt, cf, cr, k1, aux)
+        n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
+        if n_sub > 1:
+            if not _euler_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
                 return step
-            for j in range(N_STATE):
-                x[j] = xt[j]
-            sub += 1
+            continue
+        ok = True
+        for j in range(N_STATE):
+            xt[j] = x[j] + dt * k1[j]
+            if not math.isfinite(xt[j]):
+                ok = False
+        if not ok:
+            return step
+        for j in range(N_STATE):
+            x[j] = xt[j]
     return n
 
 
+_rk4_substeps_called = _jit(_rk4_substeps)
+_euler_substeps_called = _jit(_euler_substeps)
 rk4 = _jit(rk4)
 euler = _jit(euler)
