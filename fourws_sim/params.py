@@ -75,7 +75,8 @@ _CHECKS = {
 }
 
 
-def _check_value(value: Any, f: dataclasses.Field, name: str, source: str | None) -> float:
+def _check_value(value: Any, f: dataclasses.Field[Any], name: str,
+                 source: str | None) -> float:
     """``value`` as a float if it passes the range check of field ``f``, else ParameterError
     naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
