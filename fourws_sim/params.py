@@ -14,7 +14,9 @@ A vehicle file (``config/vehicles/<name>.yaml``) is a mapping with one key per s
 
 The same mapping may also sit under ``/**: ros__parameters: vehicle:`` (a ROS 2 parameter
 file); :func:`load_vehicle` accepts both layouts. All values are SI (kg, m, s, rad, N);
-the unit is part of every field name.
+the unit is part of every field name. A subsystem may declare file shorthands
+(``SHORTHANDS``): ``tire.relaxation_length_m`` sets ``relaxation_length_front_m`` and
+``relaxation_length_rear_m`` (one sigma for both axles, as the paper gives it).
 
 Which subsystems a model needs is checked by the model (``Vehicle.require``), so a 2-DOF data
 set with no roll data is a valid vehicle that a 3-DOF model refuses with a clear message.
@@ -28,7 +30,7 @@ import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, ClassVar, Mapping
 
 import yaml
 
@@ -76,22 +78,52 @@ _CHECKS = {
 }
 
 
+def _check_value(value: Any, f: dataclasses.Field[Any], name: str,
+                 source: str | None) -> float:
+    """``value`` as a float if it passes the range check of field ``f``, else ParameterError
+    naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(name, f"must be a number, got {value!r}", source)
+    value = float(value)
+    if not math.isfinite(value):
+        raise ParameterError(name, f"must be finite, got {value!r}", source)
+    ok, msg = _CHECKS[f.metadata["check"]]
+    if not ok(value):
+        raise ParameterError(name, f"{msg}, got {value!r}", source)
+    return value
+
+
 def _validate_dataclass(obj: Any, source: str | None, prefix: str) -> None:
     for f in dataclasses.fields(obj):
-        check = f.metadata.get("check")
-        if check is None:
+        if f.metadata.get("check") is None:
             continue
-        value = getattr(obj, f.name)
-        name = f"{prefix}{f.name}"
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ParameterError(name, f"must be a number, got {value!r}", source)
-        value = float(value)
-        if not math.isfinite(value):
-            raise ParameterError(name, f"must be finite, got {value!r}", source)
-        ok, msg = _CHECKS[check]
-        if not ok(value):
-            raise ParameterError(name, f"{msg}, got {value!r}", source)
+        value = _check_value(getattr(obj, f.name), f, f"{prefix}{f.name}", source)
         object.__setattr__(obj, f.name, value)
+
+
+def _expand_shorthands(cls: type, data: Mapping[str, Any], source: str | None,
+                       prefix: str) -> Mapping[str, Any]:
+    """Replace a file's shorthand keys (``cls.SHORTHANDS``: key -> the fields it sets) by the
+    fields they stand for; a shorthand given together with one of its fields is an error (the
+    file would state one fact twice)."""
+    shorthands: Mapping[str, tuple[str, ...]] = getattr(cls, "SHORTHANDS", {})
+    if not any(key in data for key in shorthands):
+        return data
+    out = dict(data)
+    for key, targets in shorthands.items():
+        if key not in out:
+            continue
+        both = [t for t in targets if t in out]
+        if both:
+            raise ParameterError(f"{prefix}{key}",
+                                 f"sets {' and '.join(targets)}; give either it or "
+                                 f"{both[0]}, not both", source)
+        value = out.pop(key)
+        _check_value(value, next(f for f in dataclasses.fields(cls) if f.name == targets[0]),
+                     f"{prefix}{key}", source)  # an error names the key the file has
+        for target in targets:
+            out[target] = value
+    return out
 
 
 def _from_mapping(cls: type, data: Any, source: str | None, prefix: str) -> Any:
@@ -99,13 +131,15 @@ def _from_mapping(cls: type, data: Any, source: str | None, prefix: str) -> Any:
     if not isinstance(data, Mapping):
         raise ParameterError(prefix.rstrip(".") or "<root>", "must be a mapping", source)
     names = {f.name: f for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - set(names))
+    unknown = sorted(set(data) - set(names) - set(getattr(cls, "SHORTHANDS", {})))
     if unknown:
         raise ParameterError(
             f"{prefix}{unknown[0]}",
-            f"unknown field (valid: {', '.join(sorted(names))})",
+            f"unknown field (valid: "
+            f"{', '.join(sorted([*names, *getattr(cls, 'SHORTHANDS', {})]))})",
             source,
         )
+    data = _expand_shorthands(cls, data, source, prefix)
     kwargs: dict[str, Any] = {}
     for name, f in names.items():
         if name in data:
@@ -188,12 +222,25 @@ class Steering:
 
 @dataclass(frozen=True)
 class Tire:
-    """Nonlinear tire choice and its coefficients (8-DOF and nonlinear 2-DOF models)."""
+    """Nonlinear tire choice and its coefficients (8-DOF and nonlinear 2-DOF models).
+
+    Relaxation length (stretched-string lag of the side force, ch. 5) per axle: a car whose
+    axles carry different loads has different tire lag. In a file, ``relaxation_length_m``
+    is the shorthand for one value on both axles (the paper's single sigma, Table 5.1); it
+    may not be given together with a per-axle field.
+    """
+
+    #: File keys that stand for several fields (expanded by the loader, see the docstring).
+    SHORTHANDS: ClassVar[Mapping[str, tuple[str, ...]]] = {
+        "relaxation_length_m": ("relaxation_length_front_m", "relaxation_length_rear_m"),
+    }
 
     model: str = "linear"
     friction_coefficient: float = _spec(default=1.0, doc="mu, peak friction (linear model)")
-    relaxation_length_m: float = _spec("nonnegative", default=0.0,
-                                       doc="sigma, 0 = no lag")
+    relaxation_length_front_m: float = _spec(
+        "nonnegative", default=0.0, doc="sigma_f, relaxation length of a front tire, 0 = no lag")
+    relaxation_length_rear_m: float = _spec(
+        "nonnegative", default=0.0, doc="sigma_r, relaxation length of a rear tire, 0 = no lag")
     cubic_coefficient_front_per_rad2: float = _spec(
         "nonnegative", default=0.0, doc="K of F = -C(1 - K alpha^2) alpha, front (ch. 7)")
     cubic_coefficient_rear_per_rad2: float = _spec(

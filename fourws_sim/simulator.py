@@ -110,7 +110,8 @@ class Simulator:
     UnknownNameError
         Unknown model, integrator or tire name.
     ParameterError
-        Bad step, or the vehicle lacks what the model needs.
+        Bad step, the vehicle lacks what the model needs, or (8-DOF) its wheels are too
+        light for the step (:func:`fourws_sim.models.eightdof.check_step`).
     """
 
     def __init__(self, vehicle: Vehicle | str | Path, model: str = EIGHT_DOF,
@@ -133,6 +134,9 @@ class Simulator:
             from fourws_sim.models import eightdof
 
             self._p = eightdof.params_for(self.vehicle, tire)
+            # a wheel too light for the step is refused here, not found diverging later
+            eightdof.check_step(self._p, self.dt_s, integrator,
+                                self.vehicle.source or self.vehicle.name)
             self._q = self._p.arr
             self._cf = self._p.coeffs_front
             self._cr = self._p.coeffs_rear
@@ -346,13 +350,40 @@ class Simulator:
         return dz
 
     def _raise_diverged(self) -> None:
-        """Name the component that goes non-finite in the next step from the kept state."""
+        """Name the component that goes non-finite in the next step from the kept state.
+
+        Replays that step with the compiled right-hand side (RK4 stages, or Euler, in the
+        step's sub-steps), which turns overflow into NaN where the NumPy reference's ``math``
+        calls would raise.
+        """
         from fourws_sim.models import eightdof
 
+        rhs = self._kernels.rhs
+        dx = np.zeros(eightdof.N_STATE)
+        aux = np.zeros(eightdof.N_AUX)
+        args = (self._u, self._q, self._cf, self._cr)
+
+        def f(z: np.ndarray) -> np.ndarray:
+            rhs(z, *args, dx, aux)
+            return dx.copy()
+
+        x = self._x.copy()
+        k1 = f(x)
+        n_sub = eightdof.substeps(float(aux[eightdof._AUX_RATE]), self.dt_s,
+                                  self.integrator.name)
+        h = self.dt_s / n_sub
         with np.errstate(all="ignore"):
-            x_next = get_integrator("rk4").advance(eightdof.derivatives, self._t, self._x,
-                                                   self._u, self._p, self.dt_s, 1)
-        bad = np.flatnonzero(~np.isfinite(x_next))
+            for sub in range(n_sub):
+                k1 = k1 if sub == 0 else f(x)
+                if self.integrator.name == "euler":
+                    x = x + h * k1
+                else:
+                    k2 = f(x + 0.5 * h * k1)
+                    k3 = f(x + 0.5 * h * k2)
+                    x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + f(x + h * k3))
+                if not np.isfinite(x).all():
+                    break
+        bad = np.flatnonzero(~np.isfinite(x))
         name = eightdof.STATE(int(bad[0])).name if bad.size else "unknown"
         raise DivergedError(f"{self.model_name}: state {name} became non-finite at "
                             f"t = {self._t:.6g} s (simulator kept the last finite state)",

@@ -149,10 +149,13 @@ def test_registry_and_bad_input(vehicle: Vehicle) -> None:
 
 
 # ------------------------------------------------------------------------ implementations
-@pytest.mark.parametrize("sigma", [0.414, 0.0])
-def test_compiled_kernel_matches_numpy_reference(vehicle: Vehicle, sigma: float) -> None:
-    """The numba right-hand side equals the NumPy ``derivatives`` to round-off."""
-    v = variant(vehicle, tire__relaxation_length_m=sigma, roll__roll_yaw_product_kgm2=50.0,
+@pytest.mark.parametrize("sigma", [(0.414, 0.414), (0.0, 0.0), (0.23, 0.13), (0.0, 0.3)])
+def test_compiled_kernel_matches_numpy_reference(vehicle: Vehicle,
+                                                 sigma: tuple[float, float]) -> None:
+    """The numba right-hand side equals the NumPy ``derivatives`` to round-off (relaxation
+    lengths front, rear in m: equal, none, per axle, rear only)."""
+    v = variant(vehicle, tire__relaxation_length_front_m=sigma[0],
+                tire__relaxation_length_rear_m=sigma[1], roll__roll_yaw_product_kgm2=50.0,
                 tire__rolling_resistance=0.015)
     p = eightdof.params_for(v)
     k = eightdof.kernels_for(p.tire_name)
@@ -182,6 +185,7 @@ def test_compiled_kernel_matches_numpy_reference(vehicle: Vehicle, sigma: float)
         got_aux = eightdof.aux_from_array(aux)
         np.testing.assert_allclose(got_aux.fy_n, ref_aux.fy_n, rtol=1e-12, atol=1e-9)
         np.testing.assert_allclose(got_aux.fz_n, ref_aux.fz_n, rtol=1e-12, atol=1e-9)
+        assert got_aux.slip_rate_per_s == pytest.approx(ref_aux.slip_rate_per_s, rel=1e-12)
     assert worst < 1e-12
 
 

@@ -170,7 +170,8 @@ def test_routh_sign_changes_count_rhp_roots():
 def test_lagged_tire_slow_modes_tend_to_2dof(vehicles):
     """Chapter 5: as sigma -> 0 the lagged model's slow eigenvalues tend to the 2-DOF's."""
     v = vehicles["5.1"]
-    tiny = dataclasses.replace(v, tire=dataclasses.replace(v.tire, relaxation_length_m=1e-4))
+    tiny = dataclasses.replace(v, tire=dataclasses.replace(
+        v.tire, relaxation_length_front_m=1e-4, relaxation_length_rear_m=1e-4))
     u = 20.0
     for law in ("fws", "sol1"):
         slow = _sorted(np.linalg.eigvals(closed_loop("2dof-lagged", tiny, law, u).A))[-2:]

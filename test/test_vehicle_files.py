@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 
 from fourws_sim.errors import ParameterError, UnknownNameError
 from fourws_sim.models import get_model
-from fourws_sim.params import VEHICLE_DIR, load_vehicle
+from fourws_sim.params import VEHICLE_DIR, load_vehicle, vehicle_from_mapping
 
 FILES = ("table_4_1_set_1", "table_4_1_set_2", "table_4_4", "table_5_1", "table_7_1_set_1",
          "table_7_1_set_2")
@@ -221,3 +221,40 @@ def test_subsystem_not_a_mapping(tmp_path):
 def test_invalid_yaml(tmp_path):
     msg = _expect(tmp_path, "name: x\nchassis: {mass_kg: 1\n  yaw: [\n", "<file>")
     assert "not valid YAML" in msg
+
+
+# ---------------------------------------------------------------- relaxation length per axle
+
+def test_relaxation_length_shorthand_sets_both_axles():
+    """Table 5.1 gives one sigma (0.414 m): ``tire.relaxation_length_m`` sets both axles, and
+    the file layout written back (``to_dict``) names the axles and loads to the same car."""
+    v = load_vehicle("table_5_1")
+    assert (v.tire.relaxation_length_front_m, v.tire.relaxation_length_rear_m) == (0.414, 0.414)
+    again = vehicle_from_mapping(v.to_dict(), "round trip")
+    assert again.tire == v.tire
+    assert "relaxation_length_m" not in v.to_dict()["tire"]
+
+
+def test_relaxation_length_per_axle(tmp_path):
+    """Per-axle values (the load-dependent tire lag of a car whose axles carry different
+    loads, 0.23 m front and 0.13 m rear for a CG-forward sedan) load as given."""
+    data = _base()
+    del data["tire"]["relaxation_length_m"]
+    data["tire"]["relaxation_length_front_m"] = 0.23
+    data["tire"]["relaxation_length_rear_m"] = 0.13
+    tire = load_vehicle(_write(tmp_path, data)).tire
+    assert (tire.relaxation_length_front_m, tire.relaxation_length_rear_m) == (0.23, 0.13)
+
+
+def test_relaxation_length_shorthand_and_axle_value_together(tmp_path):
+    """One fact once: the both-axle shorthand and a per-axle value in one file is an error."""
+    data = _base()
+    data["tire"]["relaxation_length_rear_m"] = 0.13
+    msg = _expect(tmp_path, data, "tire.relaxation_length_m")
+    assert "relaxation_length_rear_m" in msg and "not both" in msg
+
+
+def test_relaxation_length_negative(tmp_path):
+    data = _base()
+    data["tire"]["relaxation_length_m"] = -0.1
+    assert "must be >= 0" in _expect(tmp_path, data, "tire.relaxation_length_m")

@@ -58,24 +58,45 @@ steering-wheel angle over the steering ratio (:func:`road_wheel_angle`). Wheel i
 :math:`(x_i, y_i)` = FL (a, T_f/2), FR (a, -T_f/2), RL (-b, T_r/2), RR (-b, -T_r/2) has the
 centre velocity :math:`(U - r y_i, V + r x_i)` (8.34-8.38), rotated by the road-wheel angle
 into the wheel frame :math:`(v_x, v_y)`. Slip angle and slip ratio (8.39-8.46) with a
-regularized denominator (:data:`V_MIN_DEFAULT_MPS`, see :func:`params_for`):
+denominator regularized at standstill only (:data:`V_MIN_DEFAULT_MPS` = 1 m/s, the same for
+every vehicle and step):
 
 .. math::
 
     \alpha_i = \operatorname{atan2}(v_{y,i}, \max(|v_{x,i}|, v_{min})), \qquad
     \kappa_i = \frac{\omega_i R - v_{x,i}}{\max(|v_{x,i}|, v_{min})}.
 
-At rest both are exactly 0, so a car at rest with no input stays at rest; below
-:math:`v_{min}` the tires act as stiff viscous dampers, which brings the car to rest smoothly.
-The price: a tire has no static friction, so a car held only by locked wheels against a
-force F per tire creeps at :math:`F v_{min}/C_s` (7 cm/s for 1.4 kN on table_8_1's front
-tires; a car held by the brakes of its driven wheels does not move at all).
+Above :math:`v_{min}` both are the exact kinematic slips. At rest both are exactly 0, so a car
+at rest with no input stays at rest; below :math:`v_{min}` the tires act as stiff viscous
+dampers, which brings the car to rest smoothly. The price: a tire has no static friction, so a
+car held only by locked wheels against a force F per tire creeps at :math:`F v_{min}/C_s`
+(7 cm/s for 1.4 kN on table_8_1's front tires; a car held by the brakes of its driven wheels
+does not move at all).
+
+Stiff, light wheels (sub-steps)
+-------------------------------
+Linearized about free rolling, a wheel's spin relative to the road relaxes with the rate
+:math:`\lambda_i = R^2 C_s / (I_w \max(|v_{x,i}|, v_{min}))` (1/s; :math:`C_s` the tire's
+longitudinal slip stiffness), which grows without bound for light wheels and at low speed
+(table_8_1's tires with :math:`I_w` = 0.01 kg m^2: about 1e5 1/s at 2 m/s). A fixed-step
+integrator is stable only for :math:`\lambda\,dt` below a bound, so the compiled RK4 and
+Euler loops split a step into as many equal sub-steps as the fastest slip mode of the current
+state needs (:func:`substeps`): the slips keep their exact definition and the physics does not
+depend on the step. The rate (``Aux.slip_rate_per_s``) is the largest over the four wheels of
+:math:`K_{spin}/\max(|v_x|, v_{min})` (``PARAM.K_SPIN`` = :math:`R^2 C_s / I_w` of the
+stiffest tire at :data:`SPIN_LOAD_FACTOR` x its static load) and of the tire-lag rate
+:math:`\max(|v_x|, v_{min})/\sigma`. Where a step would need more than :data:`MAX_SUBSTEPS`
+sub-steps even at standstill, :func:`check_step` (called by the simulator) refuses the step
+and the wheel inertia with a one-line error.
 
 Tire forces :math:`(F_x, F_y, M_z)` come from the vehicle's tire model in the wheel frame and
 are rotated by the road-wheel angle into the body frame; aligning moments add to the yaw
-moment. With ``tire.relaxation_length_m`` :math:`\sigma > 0` the tire sees a lagged slip
-angle, :math:`\dot\alpha_{l,i} = (\max(|v_{x,i}|, v_{min})/\sigma)(\alpha_i - \alpha_{l,i})`
-(first-order stretched-string lag, ch. 5); with :math:`\sigma = 0` those four states are inert.
+moment. With a relaxation length :math:`\sigma > 0` (per axle:
+``tire.relaxation_length_front_m``, ``tire.relaxation_length_rear_m``) the tire sees a lagged
+slip angle,
+:math:`\dot\alpha_{l,i} = (\max(|v_{x,i}|, v_{min})/\sigma)(\alpha_i - \alpha_{l,i})`
+(first-order stretched-string lag, ch. 5); where :math:`\sigma = 0` the axle's two lag
+states are inert and its tires see :math:`\alpha_i`.
 
 Normal loads (Figures 8.3/8.4, eqs. 8.18-8.31)
 ----------------------------------------------
@@ -185,11 +206,13 @@ class PARAM(IntEnum):
     EPS_R = 21  #: rear roll steer, rad/rad
     MU = 22  #: road friction passed to the tire model
     F_RR = 23  #: rolling-resistance coefficient
-    SIGMA = 24  #: relaxation length, m (0 = no lag)
-    V_MIN = 25  #: slip-denominator floor, m/s
-    TAU_LT = 26  #: load-transfer lag, s
-    TAU_B = 27  #: brake hold time constant, s
-    G = 28  #: gravity, m/s^2
+    SIGMA_F = 24  #: relaxation length of a front tire, m (0 = no lag)
+    SIGMA_R = 25  #: relaxation length of a rear tire, m (0 = no lag)
+    V_MIN = 26  #: slip-denominator floor (standstill), m/s
+    TAU_LT = 27  #: load-transfer lag, s
+    TAU_B = 28  #: brake hold time constant, s
+    G = 29  #: gravity, m/s^2
+    K_SPIN = 30  #: wheel-spin slip stiffness R^2 C_s / I_w (rate x slip denominator), m/s^2
 
 
 N_STATE = len(STATE)
@@ -209,12 +232,21 @@ BRAKE_HOLD_TIME_S = 2.0e-3
 #: rim). Without it the exponential decay runs into subnormal numbers after ~1.5 s of lock,
 #: which are slow on x86 CPUs.
 HELD_SPIN_FLOOR_RADPS = 1.0e-9
-#: Smallest slip denominator, m/s (see :func:`params_for` for how it is raised for stiff tires).
+#: Smallest slip denominator, m/s: regularizes both slips at standstill only (a walking-pace
+#: floor, below which the tires act as viscous dampers).
 V_MIN_DEFAULT_MPS = 1.0
-#: Step for which :func:`params_for` sizes ``v_min`` so the wheel-spin equation stays inside
-#: RK4's stability region (|lambda dt| <= this bound), s and dimensionless.
-_REFERENCE_STEP_S = 1.0e-3
-_RK4_REAL_BOUND = 1.5
+#: Normal load, as a multiple of the static load of the more loaded axle's tires, at which
+#: ``PARAM.K_SPIN`` takes the tire's longitudinal slip stiffness (load transfer in hard
+#: braking or cornering; the rate bounds below leave room above it).
+SPIN_LOAD_FACTOR = 1.5
+#: Largest |lambda h| of a sub-step h for the fastest slip mode lambda: RK4's stability
+#: interval on the negative real axis is 2.785, explicit Euler's 2; the bounds keep a factor
+#: of 1.9 and 2 for loads beyond SPIN_LOAD_FACTOR and for the wheel's coupling to the body.
+RK4_RATE_BOUND = 1.5
+EULER_RATE_BOUND = 1.0
+#: Most sub-steps a step may take; a vehicle and step that would need more at standstill are
+#: refused by :func:`check_step` (the simulation would run 1000 times slower than at 1 ms).
+MAX_SUBSTEPS = 1000
 
 # Output slots of the per-call auxiliary array (filled by the kernels, used by outputs()).
 _AUX_FZ = 0
@@ -227,7 +259,8 @@ _AUX_DELTA_F = 24
 _AUX_DELTA_R = 25
 _AUX_AX = 26
 _AUX_AY = 27
-N_AUX = 28
+_AUX_RATE = 28
+N_AUX = 29
 
 
 class Aux(NamedTuple):
@@ -242,6 +275,9 @@ class Aux(NamedTuple):
         Road-wheel angles actually applied (command plus roll steer), rad.
     ax_mps2, ay_mps2 : float
         Acceleration of the CG, :math:`\\dot U - V r` and :math:`\\dot V + U r`, m/s^2.
+    slip_rate_per_s : float
+        Rate of the fastest slip mode (wheel spin or tire lag) at this state, 1/s: sets the
+        number of sub-steps of a step (:func:`substeps`).
     """
 
     fz_n: np.ndarray
@@ -254,6 +290,7 @@ class Aux(NamedTuple):
     delta_r_rad: float
     ax_mps2: float
     ay_mps2: float
+    slip_rate_per_s: float
 
 
 @dataclass(frozen=True)
@@ -325,11 +362,9 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
     tire : str, optional
         Tire model name overriding ``vehicle.tire.model`` (``linear`` when it has none).
     v_min_mps : float, optional
-        Slip-denominator floor in m/s. Default: the larger of :data:`V_MIN_DEFAULT_MPS` and
-        the speed below which the wheel-spin equation of the stiffest tire at 1.5 x static
-        load would leave RK4's stable region at a 1 ms step,
-        ``v = R^2 C_s dt / (1.5 I_w)`` with ``C_s`` the tire's small-slip longitudinal
-        stiffness (the wheel's slip dynamics have the eigenvalue ``-R^2 C_s / (I_w v)``).
+        Slip-denominator floor in m/s (default :data:`V_MIN_DEFAULT_MPS`): the speed below
+        which both slips are regularized. It does not depend on the wheels or the step (a
+        stiff wheel is integrated in sub-steps instead, see the module docstring).
 
     Raises
     ------
@@ -374,18 +409,22 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
     arr[P.EPS_R] = rl.roll_steer_rear
     arr[P.MU] = tr.friction_coefficient if tr is not None else 1.0
     arr[P.F_RR] = tr.rolling_resistance if tr is not None else 0.0
-    arr[P.SIGMA] = tr.relaxation_length_m if tr is not None else 0.0
+    arr[P.SIGMA_F] = tr.relaxation_length_front_m if tr is not None else 0.0
+    arr[P.SIGMA_R] = tr.relaxation_length_rear_m if tr is not None else 0.0
     arr[P.TAU_LT] = LOAD_TRANSFER_TIME_S
     arr[P.TAU_B] = BRAKE_HOLD_TIME_S
     arr[P.G] = GRAVITY_MPS2
+    m, g, a, b = c.mass_kg, GRAVITY_MPS2, c.cg_to_front_axle_m, c.cg_to_rear_axle_m
+    fz_max = SPIN_LOAD_FACTOR * m * g * max(a, b) / (2.0 * (a + b))
+    c_s = max(_longitudinal_stiffness(module, coeffs_f, fz_max, arr[P.MU]),
+              _longitudinal_stiffness(module, coeffs_r, fz_max, arr[P.MU]))
+    arr[P.K_SPIN] = bd.wheel_radius_m ** 2 * c_s / bd.wheel_spin_inertia_kgm2
+    if not math.isfinite(arr[P.K_SPIN]):
+        raise ParameterError("body.wheel_spin_inertia_kgm2",
+                             f"{bd.wheel_spin_inertia_kgm2!r} kg m^2 is too small to integrate "
+                             f"(R^2 C_s / I_w overflows)", vehicle.source or vehicle.name)
     if v_min_mps is None:
-        m, g, a, b = c.mass_kg, GRAVITY_MPS2, c.cg_to_front_axle_m, c.cg_to_rear_axle_m
-        fz_max = 1.5 * m * g * max(a, b) / (2.0 * (a + b))
-        c_s = max(_longitudinal_stiffness(module, coeffs_f, fz_max, arr[P.MU]),
-                  _longitudinal_stiffness(module, coeffs_r, fz_max, arr[P.MU]))
-        v_need = bd.wheel_radius_m ** 2 * c_s * _REFERENCE_STEP_S / (
-            _RK4_REAL_BOUND * bd.wheel_spin_inertia_kgm2)
-        v_min_mps = max(V_MIN_DEFAULT_MPS, v_need)
+        v_min_mps = V_MIN_DEFAULT_MPS
     if not (math.isfinite(v_min_mps) and v_min_mps > 0.0):
         raise ParameterError("v_min_mps", f"must be finite and > 0, got {v_min_mps!r}")
     arr[P.V_MIN] = v_min_mps
@@ -400,6 +439,54 @@ def _longitudinal_stiffness(module: ModuleType, coeffs: np.ndarray, fz: float,
     fp = module.forces(fz, 0.0, h, 20.0, mu, coeffs)[0]
     fm = module.forces(fz, 0.0, -h, 20.0, mu, coeffs)[0]
     return abs(fp - fm) / (2.0 * h)
+
+
+def rate_bound(integrator: str) -> float:
+    """Largest |lambda h| a sub-step h of ``integrator`` may take (:data:`RK4_RATE_BOUND`;
+    :data:`EULER_RATE_BOUND` for ``euler``; ``solve_ivp`` is held to RK4's)."""
+    return EULER_RATE_BOUND if integrator == "euler" else RK4_RATE_BOUND
+
+
+def substeps(slip_rate_per_s: float, dt_s: float, integrator: str = "rk4") -> int:
+    """Number of equal sub-steps the compiled loops split a step of ``dt_s`` s into when the
+    fastest slip mode has the rate ``slip_rate_per_s`` (1/s): the smallest n with
+    ``rate dt / n <= bound`` (:func:`rate_bound`), at most :data:`MAX_SUBSTEPS`. The kernels
+    compute the same number (``test_eightdof_slip`` checks it)."""
+    ratio = slip_rate_per_s * dt_s / rate_bound(integrator)
+    if ratio <= 1.0:
+        return 1
+    if not ratio < MAX_SUBSTEPS:
+        return MAX_SUBSTEPS
+    return int(math.ceil(ratio))
+
+
+def check_step(p: Params, dt_s: float, integrator: str = "rk4",
+               source: str | None = None) -> int:
+    """Check that a step of ``dt_s`` s can integrate the wheels of ``p`` and return the number
+    of sub-steps it takes at standstill (the worst case: the spin rate is largest at the slip
+    floor, ``K_SPIN / v_min``).
+
+    Raises
+    ------
+    ParameterError
+        If that number exceeds :data:`MAX_SUBSTEPS` (or is not finite): the message names the
+        step and the wheel spin inertia and gives the largest step and the smallest inertia
+        that would do.
+    """
+    q = p.arr
+    bound = rate_bound(integrator)
+    ratio = q[PARAM.K_SPIN] / q[PARAM.V_MIN] * dt_s / bound
+    if ratio <= MAX_SUBSTEPS:  # False for NaN
+        return max(1, int(math.ceil(ratio)))
+    iw = q[PARAM.I_W]
+    dt_ok = MAX_SUBSTEPS * bound * q[PARAM.V_MIN] / q[PARAM.K_SPIN]
+    iw_ok = iw * ratio / MAX_SUBSTEPS
+    raise ParameterError(
+        "body.wheel_spin_inertia_kgm2",
+        f"{iw:.3g} kg m^2 is too light for the integration step dt_s = {dt_s:g} s: its "
+        f"wheel-spin equation would need {ratio:.3g} {integrator} sub-steps per step at "
+        f"standstill (at most {MAX_SUBSTEPS}); use dt_s <= {dt_ok:.3g} s or a wheel spin "
+        f"inertia >= {iw_ok:.3g} kg m^2", source)
 
 
 def initial_state(p: Params, speed_mps: float = 0.0) -> np.ndarray:
@@ -491,9 +578,13 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     den = np.maximum(np.abs(vx), vmin)
     alpha = np.arctan2(vy, den)
     kappa = (omega * rw - vx) / den
-    sigma = q[P.SIGMA]
+    sigma = np.array([q[P.SIGMA_F], q[P.SIGMA_F], q[P.SIGMA_R], q[P.SIGMA_R]])
+    lagged = sigma > 0.0
     alpha_lag = x[S.ALPHA_FL:S.ALPHA_RR + 1]
-    alpha_tire = alpha_lag if sigma > 0.0 else alpha
+    alpha_tire = np.where(lagged, alpha_lag, alpha)
+    with np.errstate(divide="ignore"):  # 1/sigma only where sigma > 0
+        lag_rate = np.where(lagged, den / sigma, 0.0)  # 1/s
+    slip_rate = float(np.max(np.maximum(q[P.K_SPIN] / den, lag_rate)))
 
     fx = np.zeros(4)
     fy = np.zeros(4)
@@ -546,10 +637,9 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     dx[S.PSI] = r
     dx[S.AX_LT] = (ax - ax_lt) / q[P.TAU_LT]
     dx[S.AY_LT] = (ay - ay_lt) / q[P.TAU_LT]
-    if sigma > 0.0:
-        dx[S.ALPHA_FL:S.ALPHA_RR + 1] = den / sigma * (alpha - alpha_lag)
+    dx[S.ALPHA_FL:S.ALPHA_RR + 1] = lag_rate * (alpha - alpha_lag)
     aux = Aux(fz, alpha_tire.copy(), kappa, fx, fy, mz, float(delta_f), float(delta_r),
-              float(ax), float(ay))
+              float(ax), float(ay), slip_rate)
     return dx, aux
 
 
@@ -576,8 +666,9 @@ class Kernels(NamedTuple):
         quantities (slots ``_AUX_*``) into ``aux``.
     rk4 : callable
         ``rk4(x, u, q, cf, cr, dt, n) -> k``: advances ``x`` in place by ``n`` RK4 steps of
-        ``dt`` s; returns ``n`` or, if a state became non-finite, the index of that step
-        (``x`` then holds the last finite state).
+        ``dt`` s, each in as many sub-steps as its state needs (:func:`substeps`); returns
+        ``n`` or, if a state became non-finite, the index of that step (``x`` then holds the
+        state at its start).
     euler : callable
         Same contract with explicit Euler.
     """
@@ -631,4 +722,4 @@ def aux_from_array(aux: np.ndarray) -> Aux:
                aux[_AUX_KAPPA:_AUX_KAPPA + 4].copy(), aux[_AUX_FX:_AUX_FX + 4].copy(),
                aux[_AUX_FY:_AUX_FY + 4].copy(), aux[_AUX_MZ:_AUX_MZ + 4].copy(),
                float(aux[_AUX_DELTA_F]), float(aux[_AUX_DELTA_R]), float(aux[_AUX_AX]),
-               float(aux[_AUX_AY]))
+               float(aux[_AUX_AY]), float(aux[_AUX_RATE]))

@@ -16,6 +16,12 @@ phase; it must give exactly the numbers of four ``forces`` calls (``test_eightdo
 checks bit equality). Parameter-only terms are computed once per kernel call, and divisions
 by parameters are multiplications by their reciprocals: the results equal the plain scalar
 code's to round-off (``test_eightdof_regression`` pins trajectories of the model to 1e-12).
+
+Sub-steps: ``rhs`` also reports the rate of the fastest slip mode (aux slot ``_AUX_RATE``);
+the RK4 and Euler loops read it from their first stage and, where the step is too long for it
+(a light or slowly rolling wheel), take the step in ``eightdof.substeps`` equal sub-steps in a
+separate compiled function. In normal driving the arithmetic is that of a plain step, bit for
+bit, and the check costs a comparison per step.
 """
 
 from __future__ import annotations
@@ -31,8 +37,9 @@ import numpy as np
 
 from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA_F,
                                         _AUX_DELTA_R, _AUX_FX, _AUX_FY, _AUX_FZ, _AUX_KAPPA,
-                                        _AUX_MZ, HELD_SPIN_FLOOR_RADPS, INPUT, N_AUX,
-                                        N_INPUT, N_STATE, PARAM, STATE)
+                                        _AUX_MZ, _AUX_RATE, EULER_RATE_BOUND,
+                                        HELD_SPIN_FLOOR_RADPS, INPUT, MAX_SUBSTEPS, N_AUX,
+                                        N_INPUT, N_STATE, PARAM, RK4_RATE_BOUND, STATE)
 from fourws_sim.tires import get_tire
 
 #: Tire model of this variant (set by ``kernels_for`` before the module body runs).
@@ -115,12 +122,15 @@ k_rw, k_iw, k_kf, k_kr = (int(PARAM.R_W), int(PARAM.I_W), int(PARAM.K_PHI_F),
                           int(PARAM.K_PHI_R))
 k_cf, k_cr, k_ef, k_er = (int(PARAM.C_PHI_F), int(PARAM.C_PHI_R), int(PARAM.EPS_F),
                           int(PARAM.EPS_R))
-k_mu, k_frr, k_sig, k_vmin = (int(PARAM.MU), int(PARAM.F_RR), int(PARAM.SIGMA),
-                              int(PARAM.V_MIN))
-k_tlt, k_tb, k_g = int(PARAM.TAU_LT), int(PARAM.TAU_B), int(PARAM.G)
+k_mu, k_frr, k_sigf, k_sigr, k_vmin = (int(PARAM.MU), int(PARAM.F_RR), int(PARAM.SIGMA_F),
+                                       int(PARAM.SIGMA_R), int(PARAM.V_MIN))
+k_tlt, k_tb, k_g, k_kspin = int(PARAM.TAU_LT), int(PARAM.TAU_B), int(PARAM.G), int(PARAM.K_SPIN)
 a_fz, a_al, a_ka, a_fx, a_fy, a_mz = _AUX_FZ, _AUX_ALPHA, _AUX_KAPPA, _AUX_FX, _AUX_FY, _AUX_MZ
 HELD_FLOOR = float(HELD_SPIN_FLOOR_RADPS)
-a_df, a_dr, a_ax, a_ay = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY
+a_df, a_dr, a_ax, a_ay, a_rate = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY, _AUX_RATE
+RK4_BOUND = float(RK4_RATE_BOUND)
+EULER_BOUND = float(EULER_RATE_BOUND)
+MAX_SUB = int(MAX_SUBSTEPS)
 
 
 def _forces4_by_wheel(fz, alpha, kappa, vx, mu, cf, cr,  # type: ignore[no-untyped-def]
@@ -169,17 +179,18 @@ def _parameter_terms(q):  # type: ignore[no-untyped-def]
             1.0 / L,
             1.0 / q[k_tf],
             1.0 / q[k_tr],
-            1.0 / q[k_sig] if q[k_sig] > 0.0 else 0.0,
+            1.0 / q[k_sigf] if q[k_sigf] > 0.0 else 0.0,
             1.0 / q[k_iw],
             1.0 / m,
             1.0 / q[k_iz],
-            1.0 / q[k_tlt])
+            1.0 / q[k_tlt],
+            1.0 / q[k_sigr] if q[k_sigr] > 0.0 else 0.0)
 
 
 _P_L, _P_HALF_M, _P_RCF, _P_HUF, _P_RCR, _P_HUR, _P_STF, _P_STR = 0, 1, 2, 3, 4, 5, 6, 7
 _P_MSH, _P_MSHG, _P_KPHI, _P_CPHI, _P_IXZ2 = 8, 9, 10, 11, 12
-_P_INV_L, _P_INV_TF, _P_INV_TR, _P_INV_SIGMA, _P_INV_IW = 13, 14, 15, 16, 17
-_P_INV_M, _P_INV_IZ, _P_INV_TLT = 18, 19, 20
+_P_INV_L, _P_INV_TF, _P_INV_TR, _P_INV_SIGMA_F, _P_INV_IW = 13, 14, 15, 16, 17
+_P_INV_M, _P_INV_IZ, _P_INV_TLT, _P_INV_SIGMA_R = 18, 19, 20, 21
 
 
 def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
@@ -199,7 +210,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     iw = q[k_iw]
     inv_iw = pt[_P_INV_IW]
     vmin = q[k_vmin]
-    sigma = q[k_sig]
+    k_spin = q[k_kspin]
     mu = q[k_mu]
     delta_f = u[j_df] + q[k_ef] * phi
     delta_r = u[j_dr] + q[k_er] * phi
@@ -219,6 +230,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     sum_fx = 0.0
     sum_fy = 0.0
     sum_n = 0.0
+    rate = 0.0  # fastest slip mode, 1/s (sets the integrators' sub-steps)
     # wheel kinematics of the four wheels, then the four tires back to back (independent:
     # their latency chains overlap), then the wheel spin equations and the force sums (in
     # wheel order, as before)
@@ -230,6 +242,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
             fz = st_f - d_long
             dl = d_lat_f
             yw = 0.5 * tf
+            inv_sigma = pt[_P_INV_SIGMA_F]  # 0 where the axle has no tire lag
         else:
             xw = -b
             cd = cdr
@@ -237,6 +250,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
             fz = st_r + d_long
             dl = d_lat_r
             yw = 0.5 * tr
+            inv_sigma = pt[_P_INV_SIGMA_R]
         if i == 0 or i == 2:
             fz -= dl
         else:
@@ -253,13 +267,19 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         inv_den = 1.0 / den  # den >= v_min > 0
         alpha = math.atan(vy * inv_den)  # atan2(vy, den) without the quadrant logic
         kappa = (x[i_w0 + i] * rw - vx) * inv_den
-        if sigma > 0.0:
+        if inv_sigma > 0.0:
             al_lag = x[i_al0 + i]
-            dx[i_al0 + i] = den * pt[_P_INV_SIGMA] * (alpha - al_lag)
+            lag_rate = den * inv_sigma
+            dx[i_al0 + i] = lag_rate * (alpha - al_lag)
             alpha_t = al_lag
+            if lag_rate > rate:
+                rate = lag_rate
         else:
             dx[i_al0 + i] = 0.0
             alpha_t = alpha
+        spin_rate = k_spin * inv_den
+        if spin_rate > rate:
+            rate = spin_rate
         aux[a_fz + i] = fz
         aux[a_al + i] = alpha_t
         aux[a_ka + i] = kappa
@@ -350,6 +370,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     aux[a_dr] = delta_r
     aux[a_ax] = ax
     aux[a_ay] = ay
+    aux[a_rate] = rate
 
 
 def _rhs(x, u, q, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
@@ -364,8 +385,9 @@ _rhs_inline = _jit_inline(_rhs_terms)
 _rhs_called = _jit(_rhs_terms)
 rhs = _jit(_rhs)
 
-#: Rows of the integrators' work array: the four RK4 stage derivatives, the stage state.
-_K1, _K2, _K3, _K4, _XT = 0, 1, 2, 3, 4
+#: Rows of the integrators' work array: the four RK4 stage derivatives, the stage state, the
+#: state at the start of a step taken in sub-steps.
+_K1, _K2, _K3, _K4, _XT, _X0 = 0, 1, 2, 3, 4, 5
 
 
 def _take_input(u, u_held):  # type: ignore[no-untyped-def]
@@ -385,33 +407,98 @@ def _take_input(u, u_held):  # type: ignore[no-untyped-def]
 _take_input_inline = _jit_inline(_take_input)
 
 
+def _substeps(rate, dt_over_bound):  # type: ignore[no-untyped-def]
+    """Sub-steps for the slip rate ``rate`` (1/s): ``eightdof.substeps`` (1 when
+    ``rate dt <= bound``; a NaN rate gives 1 and the step's finiteness check reports it)."""
+    ratio = rate * dt_over_bound
+    if not ratio > 1.0:
+        return 1
+    if not ratio < MAX_SUB:
+        return MAX_SUB
+    return int(math.ceil(ratio))
+
+
+_substeps_inline = _jit_inline(_substeps)
+
+
+def _rk4_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
+    """One RK4 step of ``dt`` in ``n_sub`` equal sub-steps, in place (the rare path: a light or
+    slowly rolling wheel); False, with ``x`` restored to the step's start, if a state became
+    non-finite. Calls the compiled right-hand side (not inlined: the first compile stays as
+    fast as before)."""
+    xt = work[_XT]
+    x0 = work[_X0]
+    for j in range(N_STATE):
+        x0[j] = x[j]
+    h = dt / n_sub
+    half = 0.5 * h
+    sixth = h / 6.0
+    for _ in range(n_sub):
+        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
+        for stage in range(1, 4):
+            hs = h if stage == 3 else half
+            kp = work[stage - 1]
+            for j in range(N_STATE):
+                xt[j] = x[j] + hs * kp[j]
+            _rhs_called(xt, u, q, pt, cf, cr, work[stage], aux)
+        k1 = work[_K1]
+        k2 = work[_K2]
+        k3 = work[_K3]
+        k4 = work[_K4]
+        ok = True
+        for j in range(N_STATE):
+            xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+            if not math.isfinite(xt[j]):
+                ok = False
+        if not ok:
+            for j in range(N_STATE):
+                x[j] = x0[j]
+            return False
+        for j in range(N_STATE):
+            x[j] = xt[j]
+    return True
+
+
 def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     """``n`` RK4 steps in place; returns the number of finite steps done.
 
-    With ``u_held`` (the simulator's fast path: one compiled call per tick), ``u`` is first
-    checked and copied into ``u_held`` (:func:`_take_input`); -1 and no step if it fails.
+    A step whose starting state has a slip mode too fast for ``dt`` (``_substeps`` > 1) is
+    taken in that many equal sub-steps (:func:`_rk4_substeps`); otherwise (normal driving)
+    the arithmetic is that of a plain RK4 step. With ``u_held`` (the simulator's fast path:
+    one compiled call per tick), ``u`` is first checked and copied into ``u_held``
+    (:func:`_take_input`); -1 and no step if it fails.
     """
     if u_held is not None:
         if not _take_input_inline(u, u_held):
             return -1
-    work = np.empty((5, N_STATE))
+    work = np.empty((6, N_STATE))
     aux = np.empty(N_AUX)
     xt = work[_XT]
     pt = _parameter_terms_inline(q)
     half = 0.5 * dt
     sixth = dt / 6.0
+    dt_over_bound = dt / RK4_BOUND
     for step in range(n):
         # one inlined right-hand side for the four stages (stage s starts from
-        # x + h_s k_{s-1} with h = dt/2, dt/2, dt)
+        # x + h_s k_{s-1} with h = dt/2, dt/2, dt); a loop over the four, as LLVM does not
+        # unroll it into four copies of the right-hand side (first compile time)
+        n_sub = 1
         for stage in range(4):
             if stage == 0:
                 _rhs_inline(x, u, q, pt, cf, cr, work[_K1], aux)
+                n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
+                if n_sub > 1:
+                    break
             else:
                 h = dt if stage == 3 else half
                 kp = work[stage - 1]
                 for j in range(N_STATE):
                     xt[j] = x[j] + h * kp[j]
                 _rhs_inline(xt, u, q, pt, cf, cr, work[stage], aux)
+        if n_sub > 1:
+            if not _rk4_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
+                return step
+            continue
         k1 = work[_K1]
         k2 = work[_K2]
         k3 = work[_K3]
@@ -428,19 +515,51 @@ def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     return n
 
 
+def _euler_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
+    """One explicit-Euler step of ``dt`` in ``n_sub`` equal sub-steps (as
+    :func:`_rk4_substeps`)."""
+    k1 = work[0]
+    xt = work[1]
+    x0 = work[2]
+    for j in range(N_STATE):
+        x0[j] = x[j]
+    h = dt / n_sub
+    for _ in range(n_sub):
+        _rhs_called(x, u, q, pt, cf, cr, k1, aux)
+        ok = True
+        for j in range(N_STATE):
+            xt[j] = x[j] + h * k1[j]
+            if not math.isfinite(xt[j]):
+                ok = False
+        if not ok:
+            for j in range(N_STATE):
+                x[j] = x0[j]
+            return False
+        for j in range(N_STATE):
+            x[j] = xt[j]
+    return True
+
+
 def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
-    """``n`` explicit-Euler steps in place; returns the number of finite steps done (the same
-    ``u_held`` option as :func:`rk4`)."""
+    """``n`` explicit-Euler steps in place, in sub-steps where the state needs them (bound
+    ``EULER_RATE_BOUND``, :func:`_euler_substeps`); returns the number of finite steps done
+    (the same ``u_held`` option as :func:`rk4`)."""
     if u_held is not None:
         if not _take_input_inline(u, u_held):
             return -1
-    work = np.empty((2, N_STATE))
+    work = np.empty((3, N_STATE))
     aux = np.empty(N_AUX)
     k1 = work[0]
     xt = work[1]
     pt = _parameter_terms_inline(q)
+    dt_over_bound = dt / EULER_BOUND
     for step in range(n):
         _rhs_called(x, u, q, pt, cf, cr, k1, aux)
+        n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
+        if n_sub > 1:
+            if not _euler_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
+                return step
+            continue
         ok = True
         for j in range(N_STATE):
             xt[j] = x[j] + dt * k1[j]
@@ -453,5 +572,7 @@ def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     return n
 
 
+_rk4_substeps_called = _jit(_rk4_substeps)
+_euler_substeps_called = _jit(_euler_substeps)
 rk4 = _jit(rk4)
 euler = _jit(euler)

@@ -1,12 +1,15 @@
 r"""Linear 2-DOF bicycle model with time-lagged tire side force (Samsundar 1996, ch. 5).
 
 Stretched-string tire (von Schlippe): the axle side force builds up over the relaxation
-length :math:`\sigma` of rolled distance, i.e. a first-order lag of time constant
-:math:`\sigma/U` behind the quasi-static force of the kinematic slip angle (eqs. 5.8-5.19):
+length :math:`\sigma_i` of rolled distance, i.e. a first-order lag of time constant
+:math:`\sigma_i/U` behind the quasi-static force of the kinematic slip angle (eqs. 5.8-5.19;
+the paper has one :math:`\sigma` for both axles, fourws one per axle,
+``tire.relaxation_length_front_m`` and ``tire.relaxation_length_rear_m``, since tire lag depends
+on the load an axle carries):
 
 .. math::
 
-    \frac{\sigma}{U}\dot F_{yi} + F_{yi} = -C_i \alpha_{0i}, \qquad
+    \frac{\sigma_i}{U}\dot F_{yi} + F_{yi} = -C_i \alpha_{0i}, \qquad
     \alpha_{0f} = \frac{V + a r}{U} - \delta_f, \quad
     \alpha_{0r} = \frac{V - b r}{U} - \delta_r,
 
@@ -16,7 +19,7 @@ The paper carries the compliant slip angles :math:`\alpha_c = -F/C` as states; f
 the forces themselves (same dynamics, states in N). States ``[V, r, Fyf, Fyr]``, inputs
 ``[delta_f, delta_r]``. As :math:`\sigma \to 0` the force states become infinitely fast and
 the slow eigenvalues tend to those of :mod:`fourws_sim.models.linear2dof`; the steady state
-does not depend on :math:`\sigma` (section 5.7).
+does not depend on :math:`\sigma_i` (section 5.7).
 """
 
 from __future__ import annotations
@@ -53,14 +56,15 @@ class Params:
     ----------
     fixed : linear2dof.Params
         The 2-DOF parameters at the same speed.
-    relaxation_length_m : float
-        sigma in m (> 0).
+    relaxation_length_front_m, relaxation_length_rear_m : float
+        sigma of the front and rear tires in m (> 0).
     A, B : numpy.ndarray
         4x4 state and 4x2 input matrices.
     """
 
     fixed: linear2dof.Params
-    relaxation_length_m: float
+    relaxation_length_front_m: float
+    relaxation_length_rear_m: float
     A: np.ndarray
     B: np.ndarray
 
@@ -72,47 +76,52 @@ def params_for(vehicle: Vehicle, speed_mps: float, *,
     Parameters
     ----------
     vehicle : Vehicle
-        Needs the ``tire`` subsystem (its ``relaxation_length_m``) unless
-        ``relaxation_length_m`` is given.
+        Needs the ``tire`` subsystem (its ``relaxation_length_front_m`` and
+        ``relaxation_length_rear_m``) unless ``relaxation_length_m`` is given.
     speed_mps : float
         Forward speed U in m/s.
     relaxation_length_m : float, optional
-        Override of sigma in m (e.g. to sweep it).
+        Override: sigma in m of both axles (e.g. to sweep it).
 
     Raises
     ------
     ParameterError
-        If the speed is not finite and > 0, or sigma is missing or not > 0 (sigma = 0 is the
-        plain ``2dof`` model).
+        If the speed is not finite and > 0, or a sigma is missing or not > 0 (sigma = 0 is
+        the plain ``2dof`` model).
     """
     source = vehicle.source or vehicle.name
     u = check_speed(speed_mps, source)
     if relaxation_length_m is None:
         vehicle.require("tire", user="2dof-lagged model")
-        sigma = vehicle.tire.relaxation_length_m
-        field = "tire.relaxation_length_m"
+        assert vehicle.tire is not None
+        sigma_f = vehicle.tire.relaxation_length_front_m
+        sigma_r = vehicle.tire.relaxation_length_rear_m
+        fields = ("tire.relaxation_length_front_m", "tire.relaxation_length_rear_m")
     else:
-        sigma = float(relaxation_length_m)
-        field = "relaxation_length_m"
-    if not np.isfinite(sigma) or sigma <= 0.0:
-        raise ParameterError(field, f"must be > 0 for the 2dof-lagged model (0 is the 2dof "
-                             f"model), got {sigma!r}", source)
+        sigma_f = sigma_r = float(relaxation_length_m)
+        fields = ("relaxation_length_m", "relaxation_length_m")
+    for field, sigma in zip(fields, (sigma_f, sigma_r)):
+        if not np.isfinite(sigma) or sigma <= 0.0:
+            raise ParameterError(field, f"must be > 0 for the 2dof-lagged model (0 is the "
+                                 f"2dof model; tire.relaxation_length_m sets both axles), "
+                                 f"got {sigma!r}", source)
     fixed = linear2dof.params_for(vehicle, u)
     m, iz, a, b = fixed.mass_kg, fixed.yaw_inertia_kgm2, fixed.a_m, fixed.b_m
     cf, cr = fixed.cf_n_per_rad, fixed.cr_n_per_rad
-    lag = u / sigma  # 1/s, inverse time constant of the force build-up
+    lag_f = u / sigma_f  # 1/s, inverse time constants of the force build-up
+    lag_r = u / sigma_r
     S, I = STATE, INPUT
     A = np.zeros((4, 4))
     A[S.V, S.R] = -u
     A[S.V, S.FY_F] = A[S.V, S.FY_R] = 1.0 / m
     A[S.R, S.FY_F] = a / iz
     A[S.R, S.FY_R] = -b / iz
-    A[S.FY_F] = [-lag * cf / u, -lag * cf * a / u, -lag, 0.0]
-    A[S.FY_R] = [-lag * cr / u, lag * cr * b / u, 0.0, -lag]
+    A[S.FY_F] = [-lag_f * cf / u, -lag_f * cf * a / u, -lag_f, 0.0]
+    A[S.FY_R] = [-lag_r * cr / u, lag_r * cr * b / u, 0.0, -lag_r]
     B = np.zeros((4, 2))
-    B[S.FY_F, I.DELTA_F] = lag * cf
-    B[S.FY_R, I.DELTA_R] = lag * cr
-    return Params(fixed, sigma, A, B)
+    B[S.FY_F, I.DELTA_F] = lag_f * cf
+    B[S.FY_R, I.DELTA_R] = lag_r * cr
+    return Params(fixed, sigma_f, sigma_r, A, B)
 
 
 def matrices(vehicle: Vehicle, speed_mps: float, *,
