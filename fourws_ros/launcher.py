@@ -453,6 +453,7 @@ def run_config(scenario: Any, law: str) -> dict[str, Any]:
         "tire": scenario.tire, "integrator": scenario.integrator,
         "integration_step_s": scenario.integration_step_s,
         "control_period_s": scenario.control_period_s,
+        "controller_period_s": scenario.controller_period_s,
         "state_period_s": scenario.state_period_s, "clock_mode": scenario.clock_mode,
         "speed_mps": float(scenario.maneuver.initial_speed_mps),
         "scenario": scenario.to_dict(), "versions": versions,
@@ -466,9 +467,8 @@ def node_parameters(scenario: Any, law: str, bag_path: Path | None,
 
     lockstep = scenario.clock_mode == "lockstep"
     belief = scenario.belief
-    # the controller is called once per published state: in lockstep once per control
-    # period, in realtime once per state period — the interval of its rate limit
-    answer_period = scenario.control_period_s if lockstep else scenario.state_period_s
+    # the interval of the controller's rate limit and the period its law is built for
+    answer_period = scenario.controller_period_s
     rec_topics = scenario.recording.topics
     recorded = list(DEFAULT_TOPICS if rec_topics == "all" else rec_topics)
     records_state = bag_path is not None and topics.STATE in recorded

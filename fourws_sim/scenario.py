@@ -115,6 +115,13 @@ class Scenario:
         return self.belief.build(simulated)
 
     @property
+    def controller_period_s(self) -> float:
+        """Interval between the controller's answers, s, over which its command is held: it
+        answers every published state, in lockstep once per control period and in realtime
+        once per state period. The law is built for this period."""
+        return self.control_period_s if self.clock_mode == "lockstep" else self.state_period_s
+
+    @property
     def control_steps(self) -> int:
         """Integration steps per control period."""
         return int(round(self.control_period_s / self.integration_step_s))
