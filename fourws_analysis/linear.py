@@ -231,6 +231,13 @@ class SampledLoop:
         """Largest ``|z|``."""
         return float(np.max(np.abs(self.eigenvalues)))
 
+    def radius(self, min_abs_s_per_s: float = 0.0) -> float:
+        """Largest ``|z|`` of the modes with ``|ln(z)/T| > min_abs_s_per_s`` (1/s), e.g. 1e-6
+        to leave out modes at z = 1 that steering does not reach (an 8-DOF's speed and wheel
+        spin at a trim without drag); nan when no mode is left."""
+        keep = np.abs(self.s_plane) > min_abs_s_per_s
+        return float(np.max(np.abs(self.eigenvalues[keep]))) if np.any(keep) else math.nan
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (``z`` and ``s_per_s`` as ``[re, im]`` pairs)."""
         return {"period_s": self.period_s, "spectral_radius": self.spectral_radius,

@@ -337,7 +337,8 @@ def _metrics_table(runs: Sequence[RunAnalysis]) -> str:
         add(f"{name} sampled at T: ln(z)/T (1/s)", lambda r, n=name: ", ".join(
             f"{e.real:.3f}{e.imag:+.3f}j" for e in r.sampled[n].s_plane
             if abs(e) > 1e-6 and e.real > -40))
-        add(f"{name} sampled at T: largest |z|", lambda r, n=name: r.sampled[n].spectral_radius)
+        add(f"{name} sampled at T: largest |z| (modes with s ≠ 0)",
+            lambda r, n=name: r.sampled[n].radius(1e-6))
     head = "".join(f"<th>{html.escape(r.name)}</th>" for r in runs)
     body = "".join(f"<tr><td>{html.escape(label)}</td>"
                    + "".join(f"<td>{_fmt(v)}</td>" for v in values) + "</tr>"
