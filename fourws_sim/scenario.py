@@ -235,6 +235,10 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     for law in law_options:
         if law not in laws_data:
             raise ParameterError(f"law_options.{law}", "names a law not in laws", source)
+        if "control_period_s" in law_options[law]:
+            # every law runs at the loop's period (fourws_control.make_loop_law)
+            raise ParameterError(f"law_options.{law}.control_period_s",
+                                 "is the scenario's control_period_s; set that instead", source)
 
     model = _string(data, "model", "8dof", source)
     if model not in _known_models():
