@@ -239,8 +239,10 @@ class SampledLoop:
         return float(np.max(np.abs(self.eigenvalues[keep]))) if np.any(keep) else math.nan
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready mapping (``z`` and ``s_per_s`` as ``[re, im]`` pairs)."""
+        """JSON-ready mapping (``z`` and ``s_per_s`` as ``[re, im]`` pairs;
+        ``spectral_radius_s_nonzero`` is :meth:`radius` over modes with ``|s| > 1e-6``)."""
         return {"period_s": self.period_s, "spectral_radius": self.spectral_radius,
+                "spectral_radius_s_nonzero": self.radius(1e-6),
                 "z": [[float(z.real), float(z.imag)] for z in self.eigenvalues],
                 "s_per_s": [[float(e.real), float(e.imag)] for e in self.s_plane]}
 

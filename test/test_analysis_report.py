@@ -166,5 +166,6 @@ def test_sampled_eigenvalues_of_an_lqr_run_at_50_hz(tmp_path: Path) -> None:
     metrics = ana.metrics()["model_sampled_eigenvalues"]
     assert metrics["2dof"]["period_s"] == 0.02
     assert len(metrics["8dof-lin"]["s_per_s"]) == ana.sampled["8dof-lin"].eigenvalues.size
+    assert metrics["8dof-lin"]["spectral_radius_s_nonzero"] == eight.radius(1e-6)
     html = write_report([ana], tmp_path / "rep").read_text()
     assert "2dof sampled at T: ln(z)/T (1/s)" in html and "8dof-lin sampled at T" in html
