@@ -11,7 +11,6 @@ times the steering rate of the ramp is a rear-steer rate the actuator must follo
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
 import pytest
