@@ -16,6 +16,10 @@ every run with a vehicle                    eigenvalues of the linearized 8-DOF 
 
 Model overlays (analytic 2-DOF/3-DOF closed with the run's law, and the 8-DOF linearized
 numerically at the run's straight-running trim) need the vehicle mapping of the run config.
+The law is rebuilt for the period it ran at (``controller_period_s`` of the run config, else
+``control_period_s``), and each model is also closed as the controller closes it, the command
+held over that period (:func:`fourws_analysis.linear.sample_loop`: eigenvalues z and
+``ln(z)/T``).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from fourws_analysis import frequency as fq
-from fourws_analysis import identify, iso4138, iso7401, linearize
+from fourws_analysis import identify, iso4138, iso7401, linear, linearize
 from fourws_analysis.bag import MetricUnavailableError, UniformRun
 from fourws_sim.errors import FourwsError
 
@@ -61,6 +65,8 @@ class RunAnalysis:
     step : iso7401.StepResult or None
     steady : iso4138.SteadyStateHandling or None
     modes : identify.IdentifiedModes or None
+    sampled : dict of str to linear.SampledLoop
+        The models of ``models`` closed with the law held over its control period.
     eig_sweep : linearize.EigenSweep or None
     unavailable : dict of str to str
         Metric -> why it could not be computed.
@@ -76,6 +82,7 @@ class RunAnalysis:
     step: iso7401.StepResult | None = None
     steady: iso4138.SteadyStateHandling | None = None
     modes: identify.IdentifiedModes | None = None
+    sampled: dict[str, linear.SampledLoop] = field(default_factory=dict)
     eig_sweep: linearize.EigenSweep | None = None
     unavailable: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
@@ -117,6 +124,8 @@ class RunAnalysis:
             out["model_steady_state_gains"] = {
                 k: {o: m.dc_gain(o) for o in m.C}
                 for k, m in self.models.items()}
+        if self.sampled:
+            out["model_sampled_eigenvalues"] = {k: v.to_dict() for k, v in self.sampled.items()}
         if self.modes is not None and self.models:
             out["identified_vs_model"] = {
                 k: [{"identified": [e.real, e.imag], "model": [p.real, p.imag],
@@ -183,6 +192,36 @@ def _speed(run: UniformRun) -> float:
     return float(np.median(speed))
 
 
+def _eightdof_loop(vehicle: Any, speed_mps: float, law: Any, belief_vehicle: Any,
+                   law_options: Mapping[str, Any] | None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, Any]:
+    """Open-loop 8-DOF Jacobians at straight running and the law's gains in its state order:
+    ``(a, b, k_x, k_f, model module)``, ``delta_r = k_x x + k_f delta_f``. ``law`` is a name
+    (built on the belief vehicle with ``law_options``) or a built law."""
+    from fourws_control import Law, Signal, make_law
+    from fourws_sim.models import get_model
+
+    mod = get_model("8dof")
+    p = mod.params_for(vehicle)
+    x0 = mod.initial_state(p, speed_mps)
+    u0 = np.zeros(len(mod.INPUT))
+    a, b = linearize.jacobians(mod.derivatives, x0, u0, p)
+    s = mod.STATE
+    k_x = np.zeros(a.shape[0])
+    k_f = 0.0
+    if isinstance(law, Law) or law != "fws":
+        law_obj = law if isinstance(law, Law) else make_law(
+            law, belief_vehicle if belief_vehicle is not None else vehicle,
+            **dict(law_options or {}))
+        k = law_obj.gains(speed_mps)
+        k_f = float(k[Signal.DELTA_F])
+        k_x[s.R] = k[Signal.YAW_RATE]
+        k_x[s.PHI] = k[Signal.ROLL]
+        k_x[s.P] = k[Signal.ROLL_RATE]
+        k_x[s.V] = k[Signal.LATERAL_VELOCITY]
+    return a, b, k_x, k_f, mod
+
+
 def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws",
                            belief_vehicle: Any = None,
                            law_options: Mapping[str, Any] | None = None) -> fq.LinearSystem:
@@ -192,27 +231,9 @@ def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws",
     8-DOF states with the same meaning (yaw rate, roll, roll rate, lateral velocity); the
     actuator limits are inactive for small signals.
     """
-    from fourws_sim.models import get_model
-
-    mod = get_model("8dof")
-    p = mod.params_for(vehicle)
-    x0 = mod.initial_state(p, speed_mps)
-    u0 = np.zeros(len(mod.INPUT))
-    a, b = linearize.jacobians(mod.derivatives, x0, u0, p)
+    a, b, k_x, k_f, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
     s, i = mod.STATE, mod.INPUT
     n = a.shape[0]
-    k_x = np.zeros(n)
-    k_f = 0.0
-    if law != "fws":
-        from fourws_control import Signal, make_law
-
-        k = make_law(law, belief_vehicle if belief_vehicle is not None else vehicle,
-                     **dict(law_options or {})).gains(speed_mps)
-        k_f = float(k[Signal.DELTA_F])
-        k_x[s.R] = k[Signal.YAW_RATE]
-        k_x[s.PHI] = k[Signal.ROLL]
-        k_x[s.P] = k[Signal.ROLL_RATE]
-        k_x[s.V] = k[Signal.LATERAL_VELOCITY]
     a_cl = a + np.outer(b[:, i.DELTA_R], k_x)
     b_cl = b[:, i.DELTA_F] + b[:, i.DELTA_R] * k_f
     # position and heading feed nothing back (zero columns): drop them, so A is invertible
@@ -227,6 +248,49 @@ def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws",
     D = {"yaw_rate_radps": 0.0, "sideslip_rad": 0.0, "lateral_accel_mps2": float(b_cl[i_v]),
          "roll_rad": 0.0, "rear_wheel_angle_rad": k_f}
     return fq.LinearSystem(f"8dof linearized {law}", a_cl, b_cl, C, D)
+
+
+def eightdof_sampled_loop(vehicle: Any, speed_mps: float, period_s: float, law: Any = "fws",
+                          belief_vehicle: Any = None,
+                          law_options: Mapping[str, Any] | None = None) -> linear.SampledLoop:
+    """The linearized 8-DOF of :func:`eightdof_linear_system` with the law's command held over
+    each control period ``period_s`` (s). ``law`` is a name or a built
+    :class:`fourws_control.Law`. Position and heading, which feed nothing back, are left out
+    (they would add eigenvalues z = 1); the speed and wheel-spin modes stay (z = 1 at a trim
+    without drag, ``ln(z)/T = 0``)."""
+    a, b, k_x, _, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
+    b_r = b[:, mod.INPUT.DELTA_R]
+    keep = np.nonzero(np.any(np.abs(a + np.outer(b_r, k_x)) > 0.0, axis=0))[0]
+    return linear.sample_loop(a[np.ix_(keep, keep)], b_r[keep], k_x[keep], period_s)
+
+
+def _law_period(run: UniformRun) -> float | None:
+    """The period the run's law was built for and its command held, s (run config)."""
+    for key in ("controller_period_s", "control_period_s"):
+        value = run.config.get(key)
+        if isinstance(value, (int, float)) and not isinstance(value, bool) \
+                and math.isfinite(value) and value > 0:
+            return float(value)
+    return None
+
+
+def _sampled_models(res: RunAnalysis, vehicle: Any, speed: float, period: float,
+                    belief: Any, options: Mapping[str, Any]) -> None:
+    """Fill ``res.sampled`` for the models of ``res.models``."""
+    from fourws_control import make_law
+
+    def analytic(model: str) -> linear.SampledLoop:
+        law = make_law(res.law, belief if belief is not None else vehicle, **dict(options))
+        return linear.sampled_closed_loop(model, vehicle, law, speed, period)
+
+    def eightdof() -> linear.SampledLoop:
+        return eightdof_sampled_loop(vehicle, speed, period, res.law, belief, options)
+
+    for model in res.models:
+        loop = _try(res, f"model_{model}_sampled",
+                    eightdof if model == "8dof-lin" else lambda m=model: analytic(m))
+        if loop is not None:
+            res.sampled[model] = loop
 
 
 def _try(result: RunAnalysis, metric: str, fn: Callable[[], Any]) -> Any:
@@ -282,6 +346,9 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
     options = run.config.get("law_options") or {}
     if not isinstance(options, Mapping):
         options = {}
+    period = _law_period(run)
+    if period is not None:
+        options = {**options, "control_period_s": period}
     if vehicle is not None and math.isfinite(speed):
         for model in ("2dof", "3dof"):
             if model == "3dof" and vehicle.roll is None:
@@ -297,6 +364,8 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
                                                        belief, options))
             if sys8 is not None:
                 res.models["8dof-lin"] = sys8
+        if period is not None:
+            _sampled_models(res, vehicle, speed, period, belief, options)
 
     # frequency response
     if man in fq.FREQUENCY_MANEUVERS:

@@ -16,7 +16,9 @@ eigenvalues with natural frequencies (Hz) and damping ratios, the Routh-Hurwitz 
 characteristic polynomial, controllability through the rear steer, the critical speed,
 transfer functions, Bode data (frequencies in Hz), steady-state gains and the Lyapunov
 check of chapter 5. python-control builds the LTI objects; scipy solves the Lyapunov
-equation. Results are dataclasses with ``to_dict()`` for JSON.
+equation. :func:`sampled_closed_loop` closes the same loop as the controller runs it, the
+command held over each control period (zero-order hold): eigenvalues in the z-plane and
+mapped to the s-plane, ``ln(z) / T``. Results are dataclasses with ``to_dict()`` for JSON.
 
 Outputs of the transfer functions (SI, per unit of the driver input): ``yaw_rate`` (rad/s),
 ``lateral_acceleration`` :math:`a_y = \dot V + U r` (m/s^2), ``sideslip``
@@ -35,8 +37,9 @@ import control
 import numpy as np
 import scipy.linalg
 import scipy.optimize
+import scipy.signal
 
-from fourws_control.base import Law, check_speed
+from fourws_control.base import Law, check_option, check_speed
 from fourws_control.registry import make_law
 from fourws_control.signals import LINEAR_MODELS, signal_map
 from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
@@ -191,6 +194,113 @@ def modes(A: np.ndarray) -> list[Mode]:
 def is_stable(A: np.ndarray, tol: float = MARGINAL_TOL_PER_S) -> bool:
     """True when every eigenvalue of ``A`` has real part < ``-tol`` (asymptotic stability)."""
     return bool(np.max(np.linalg.eigvals(np.asarray(A, dtype=float)).real) < -tol)
+
+
+# ------------------------------------------------------------------------------ sampled loop
+
+@dataclass(frozen=True)
+class SampledLoop:
+    r"""A continuous model closed with a law whose command is held over each control period.
+
+    The law runs once per period ``T`` and the actuator holds its command (zero-order hold),
+    so from tick to tick :math:`x_{k+1} = (\Phi + \Gamma_r K_x) x_k + \dots` with
+    :math:`\Phi = e^{A T}`, :math:`\Gamma_r = \int_0^T e^{A t} dt\, b_r`.
+
+    Attributes
+    ----------
+    period_s : float
+        Control period T, s.
+    Phi : numpy.ndarray
+        Closed-loop transition matrix over one period (n x n).
+    eigenvalues : numpy.ndarray
+        Its eigenvalues z (z-plane, dimensionless); stable when all ``|z| < 1``.
+    """
+
+    period_s: float
+    Phi: np.ndarray
+    eigenvalues: np.ndarray
+
+    @property
+    def s_plane(self) -> np.ndarray:
+        """The eigenvalues mapped to the s-plane, ``ln(z) / T`` (1/s; principal branch, so
+        imaginary parts within +-pi/T: a negative real z maps to pi/T, the Nyquist rate)."""
+        return np.log(self.eigenvalues.astype(complex)) / self.period_s
+
+    @property
+    def spectral_radius(self) -> float:
+        """Largest ``|z|``."""
+        return float(np.max(np.abs(self.eigenvalues)))
+
+    def radius(self, min_abs_s_per_s: float = 0.0) -> float:
+        """Largest ``|z|`` of the modes with ``|ln(z)/T| > min_abs_s_per_s`` (1/s), e.g. 1e-6
+        to leave out modes at z = 1 that steering does not reach (an 8-DOF's speed and wheel
+        spin at a trim without drag); nan when no mode is left."""
+        keep = np.abs(self.s_plane) > min_abs_s_per_s
+        return float(np.max(np.abs(self.eigenvalues[keep]))) if np.any(keep) else math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping (``z`` and ``s_per_s`` as ``[re, im]`` pairs;
+        ``spectral_radius_s_nonzero`` is :meth:`radius` over modes with ``|s| > 1e-6``)."""
+        return {"period_s": self.period_s, "spectral_radius": self.spectral_radius,
+                "spectral_radius_s_nonzero": self.radius(1e-6),
+                "z": [[float(z.real), float(z.imag)] for z in self.eigenvalues],
+                "s_per_s": [[float(e.real), float(e.imag)] for e in self.s_plane]}
+
+
+def sample_loop(A_open: np.ndarray, b_rear: np.ndarray, K_x: np.ndarray,
+                period_s: float) -> SampledLoop:
+    """Close ``dx/dt = A_open x + b_rear delta_r`` with ``delta_r = K_x x`` held over
+    ``period_s`` (zero-order hold, ``scipy.signal.cont2discrete``).
+
+    Parameters
+    ----------
+    A_open : numpy.ndarray
+        Open-loop state matrix (n x n), 1/s.
+    b_rear : numpy.ndarray
+        Rear-steer column (n,).
+    K_x : numpy.ndarray
+        Law gains on the states (n,), rad per state unit.
+    period_s : float
+        Control period, s (> 0).
+
+    Raises
+    ------
+    ParameterError
+        Period not finite and > 0.
+    NonFiniteError
+        Non-finite matrices.
+    """
+    T = check_option("period_s", period_s)
+    A_open = np.asarray(A_open, dtype=float)
+    b = np.asarray(b_rear, dtype=float).reshape(-1, 1)
+    k = np.asarray(K_x, dtype=float).reshape(1, -1)
+    if not (np.all(np.isfinite(A_open)) and np.all(np.isfinite(b)) and np.all(np.isfinite(k))):
+        raise NonFiniteError("sampled loop: non-finite model or gains")
+    n = A_open.shape[0]
+    phi, gamma, *_ = scipy.signal.cont2discrete(
+        (A_open, b, np.zeros((1, n)), np.zeros((1, 1))), T, method="zoh")
+    phi_cl = phi + gamma @ k
+    z = np.linalg.eigvals(phi_cl)
+    return SampledLoop(T, phi_cl, z[np.lexsort((z.imag, -np.abs(z)))])
+
+
+def sampled_closed_loop(model_name: str, vehicle: Vehicle, law: Law | str | None,
+                        speed_mps: float, period_s: float | None = None) -> SampledLoop:
+    """:func:`closed_loop` with the law's command held over each control period.
+
+    Parameters
+    ----------
+    model_name, vehicle, law, speed_mps
+        As :func:`closed_loop`.
+    period_s : float, optional
+        Control period, s; default the law's ``control_period_s`` (the period it was built
+        for).
+    """
+    law_obj = _law(law, vehicle)
+    cl = closed_loop(model_name, vehicle, law_obj, speed_mps)
+    g = law_obj.linear_gains(model_name, vehicle, cl.speed_mps)
+    T = law_obj.control_period_s if period_s is None else period_s
+    return sample_loop(cl.A_open, cl.b_rear, g.K_x, T)
 
 
 # ------------------------------------------------------------------------------ Routh-Hurwitz

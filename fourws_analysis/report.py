@@ -330,6 +330,15 @@ def _metrics_table(runs: Sequence[RunAnalysis]) -> str:
         add(f"{name} model eigenvalues (1/s)", lambda r, n=name: ", ".join(
             f"{e.real:.3f}{e.imag:+.3f}j" for e in r.models[n].eigenvalues
             if abs(e) > 1e-6 and e.real > -40))
+    # the same models as the controller closes them: command held over its period
+    add("law's control period T (s)",
+        lambda r: next((v.period_s for v in r.sampled.values()), None))
+    for name in ("2dof", "3dof", "8dof-lin"):
+        add(f"{name} sampled at T: ln(z)/T (1/s)", lambda r, n=name: ", ".join(
+            f"{e.real:.3f}{e.imag:+.3f}j" for e in r.sampled[n].s_plane
+            if abs(e) > 1e-6 and e.real > -40))
+        add(f"{name} sampled at T: largest |z| (modes with s ≠ 0)",
+            lambda r, n=name: r.sampled[n].radius(1e-6))
     head = "".join(f"<th>{html.escape(r.name)}</th>" for r in runs)
     body = "".join(f"<tr><td>{html.escape(label)}</td>"
                    + "".join(f"<td>{_fmt(v)}</td>" for v in values) + "</tr>"

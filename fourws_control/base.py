@@ -24,6 +24,16 @@ the LQR design becomes ill-conditioned near standstill. Below ``min_speed_mps`` 
 :data:`DEFAULT_MIN_SPEED_MPS`) every law therefore uses the gains of ``min_speed_mps`` scaled
 by ``U / min_speed_mps``: the rear steer fades linearly to zero at standstill (and stays zero
 when reversing), continuous in ``U`` and never NaN.
+
+Sampling
+--------
+A law runs in a sampled loop: its command is computed once per control period ``Tc`` and held
+(zero-order hold) by the actuator until the next (``docs/architecture.md``, tick sequence of
+:mod:`fourws_run.closed_loop`). Every law is built with the period it will run at
+(``control_period_s``, default :data:`DEFAULT_CONTROL_PERIOD_S`; the offline runner and the
+controller node pass the loop's period through :func:`fourws_control.registry.make_loop_law`).
+Laws designed in continuous time (closed forms of chapters 4 and 6) do not use it; a law
+designed for the sampled loop (``lqr``'s default design) does.
 """
 
 from __future__ import annotations
@@ -43,6 +53,9 @@ from fourws_sim.params import Vehicle
 #: Speed below which the gains fade linearly to zero at standstill, m/s. Parking-lot speeds
 #: (~7 km/h) keep full gains; walking pace and below fades out.
 DEFAULT_MIN_SPEED_MPS = 2.0
+#: Control period a law is designed for when none is given, s: fourws' default 100 Hz loop
+#: (``control_period_s`` of ``config/scenarios/*.yaml`` and of the controller node).
+DEFAULT_CONTROL_PERIOD_S = 0.01
 
 
 class Signal(IntEnum):
@@ -143,6 +156,8 @@ class Law(ABC):
         The vehicle the controller believes it drives; gains are computed from it.
     min_speed_mps : float, optional
         Below this speed the gains fade linearly to zero at standstill (see module docstring).
+    control_period_s : float, optional
+        Period of the sampled loop the law runs in, s (> 0; see module docstring).
 
     Subclasses set :attr:`name`, :attr:`signals` (the signals with possibly non-zero gain)
     and implement :meth:`_design_gains` for ``U >= min_speed_mps``.
@@ -156,7 +171,8 @@ class Law(ABC):
     signals: ClassVar[tuple[Signal, ...]] = ()
 
     def __init__(self, belief_vehicle: Vehicle, *,
-                 min_speed_mps: float = DEFAULT_MIN_SPEED_MPS) -> None:
+                 min_speed_mps: float = DEFAULT_MIN_SPEED_MPS,
+                 control_period_s: float = DEFAULT_CONTROL_PERIOD_S) -> None:
         if not isinstance(belief_vehicle, Vehicle):
             raise ParameterError("belief_vehicle",
                                  f"must be a fourws Vehicle, got {type(belief_vehicle).__name__}")
@@ -164,6 +180,7 @@ class Law(ABC):
         #: 2-DOF parameters of the belief vehicle, extracted once (laws run at 100 Hz)
         self.bicycle = bicycle(belief_vehicle)
         self.min_speed_mps = check_option("min_speed_mps", min_speed_mps)
+        self.control_period_s = check_option("control_period_s", control_period_s)
 
     @abstractmethod
     def _design_gains(self, speed_mps: float) -> np.ndarray:
@@ -252,7 +269,7 @@ class Law(ABC):
     def describe(self) -> Mapping[str, Any]:
         """Name, summary and belief-vehicle name (for run configurations)."""
         return {"law": self.name, "summary": self.summary, "belief_vehicle": self.vehicle.name,
-                "min_speed_mps": self.min_speed_mps}
+                "min_speed_mps": self.min_speed_mps, "control_period_s": self.control_period_s}
 
 
 class RearSteerActuator:

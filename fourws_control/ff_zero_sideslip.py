@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from fourws_control.base import DEFAULT_MIN_SPEED_MPS, Law, Signal
+from fourws_control.base import DEFAULT_CONTROL_PERIOD_S, DEFAULT_MIN_SPEED_MPS, Law, Signal
 from fourws_sim.errors import ParameterError
 from fourws_sim.params import Vehicle
 
@@ -65,6 +65,8 @@ class FfZeroSideslipLaw(Law):
         Constant feed-forward ratio; then Kr(U) of eq. 4.14 is added (see module docstring).
     min_speed_mps : float
         Low-speed fade (:mod:`fourws_control.base`).
+    control_period_s : float
+        Loop period, s (not used: a continuous-time closed form).
     """
 
     name = "ff_zero_sideslip"
@@ -72,8 +74,10 @@ class FfZeroSideslipLaw(Law):
     signals: tuple[Signal, ...] = (Signal.DELTA_F,)
 
     def __init__(self, belief_vehicle: Vehicle, *, ksf: float | None = None,
-                 min_speed_mps: float = DEFAULT_MIN_SPEED_MPS) -> None:
-        super().__init__(belief_vehicle, min_speed_mps=min_speed_mps)
+                 min_speed_mps: float = DEFAULT_MIN_SPEED_MPS,
+                 control_period_s: float = DEFAULT_CONTROL_PERIOD_S) -> None:
+        super().__init__(belief_vehicle, min_speed_mps=min_speed_mps,
+                         control_period_s=control_period_s)
         self.ksf = None
         if ksf is not None:
             if isinstance(ksf, bool) or not isinstance(ksf, (int, float)) \

@@ -7,7 +7,7 @@ Modules are imported on first use.
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import Any, Mapping
 
 from fourws_control.base import Law
 from fourws_sim.errors import ParameterError, UnknownNameError
@@ -72,3 +72,38 @@ def make_law(name: str, belief_vehicle: Vehicle, **options: Any) -> Law:
     except TypeError as exc:
         # an unexpected keyword is the caller's error: name the option and the law
         raise ParameterError("options", f"law {name!r}: {exc}") from None
+
+
+def make_loop_law(name: str, belief_vehicle: Vehicle, control_period_s: float,
+                  options: Mapping[str, Any] | None = None) -> Law:
+    """Build law ``name`` for a loop that applies its command every ``control_period_s``.
+
+    The loop's period is the one source of the law's ``control_period_s`` (a sampled design
+    such as ``lqr``'s is computed for it); the offline runner and the controller node build
+    their laws here.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`LAWS`.
+    belief_vehicle : Vehicle
+        The controller's belief of the vehicle.
+    control_period_s : float
+        The loop's control period, s (> 0).
+    options : mapping, optional
+        The law's other options.
+
+    Raises
+    ------
+    ParameterError
+        ``options`` sets ``control_period_s`` (the loop sets it), or as :func:`make_law`.
+    UnknownNameError
+        Unknown law name.
+    """
+    opts = dict(options or {})
+    if "control_period_s" in opts:
+        raise ParameterError("law_options.control_period_s",
+                             f"law {name!r}: the law runs at the loop's control period "
+                             f"({control_period_s} s); set the scenario's control_period_s "
+                             "instead")
+    return make_law(name, belief_vehicle, control_period_s=control_period_s, **opts)

@@ -27,7 +27,8 @@ belief_scale_front, belief_scale_rear : float
 angle_limit_rad, rate_limit_radps : float
     Actuator limits (0 = the vehicle file's ``actuators``).
 control_period_s : float
-    Period over which the rate limit acts, s (the simulator's control period).
+    Period over which the rate limit acts and the law is built for, s (the interval between
+    the controller's answers).
 integration_step_s, state_period_s, clock_mode
     The run's step, the period of the states answered and the clock mode: states that do not
     continue the simulator's sequence are refused (:class:`fourws_run.ticks.StateGate`).
@@ -97,7 +98,8 @@ class ControllerNode(Node):
             description="rear angle rate limit, rad/s (0 = vehicle actuators)",
             floating_point_range=_float_range(0.0, MAX_RATE_LIMIT_RADPS)))
         self.declare_parameter("control_period_s", 0.01, ParameterDescriptor(
-            description="control period (rate-limit interval), s", read_only=True,
+            description="control period (rate-limit interval, the law's period), s",
+            read_only=True,
             floating_point_range=_float_range(1e-4, 1.0)))
         self.declare_parameter("driver_wait_s", 0.5, ParameterDescriptor(
             description="wall time to wait for the driver input of a tick before using the "
@@ -154,7 +156,7 @@ class ControllerNode(Node):
 
     def _build(self, values: dict[str, Any], keep_angle: float | None) -> tuple[Any, Any]:
         """Law and actuator from parameter values; raises FourwsError on bad values."""
-        from fourws_control import RearSteerActuator, make_law
+        from fourws_control import RearSteerActuator, make_loop_law
         from fourws_sim.params import load_vehicle, vehicle_from_mapping
 
         try:
@@ -175,7 +177,7 @@ class ControllerNode(Node):
             sf, sr = float(values["belief_scale_front"]), float(values["belief_scale_rear"])
             if sf != 1.0 or sr != 1.0:
                 belief = belief.with_axle_tires(sf, sr)
-        law = make_law(str(values["law"]), belief, **options)
+        law = make_loop_law(str(values["law"]), belief, self.dt_s, options)
         law.gains(max(self.vehicle_speed_hint(), 1.0))  # fail now on a law that cannot design
         limits: dict[str, float] = {}
         if values["angle_limit_rad"] > 0.0:

@@ -42,7 +42,7 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
     records = bag_path is not None and bool(config.recorded_topics)
     controller = config.controller.node_name
     gate = {"integration_step_s": config.integration_step_s,
-            "state_period_s": config.state_interval_s, "clock_mode": config.clock_mode}
+            "state_period_s": config.controller_period_s, "clock_mode": config.clock_mode}
     # the vehicle as a whole mapping (tire override applied): the run's vehicle may be one no
     # file holds (a study's scaled mass, a belief with scaled cornering stiffness)
     vehicle = {"vehicle": config.vehicle.name,
@@ -70,7 +70,7 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             # the controller is called once per published state: in lockstep once per
             # control period, in realtime once per state period -- the interval of its rate
             # limit
-            "control_period_s": config.state_interval_s,
+            "control_period_s": config.controller_period_s,
             # lockstep: the driver input of every tick comes (the run ends when it does not)
             "driver_wait_s": 0.0 if lockstep else 0.5,
             **gate,

@@ -11,7 +11,7 @@ Two modes (parameter ``mode``):
     Lockstep replay: for every ``VehicleState`` a running simulator publishes, publishes the
     recorded messages of the chosen topics whose stamp equals the state's stamp. This is how a
     recorded driver input drives a new lockstep run (e.g. with another controller) in place of
-    the maneuver node: ``topics: [/fourws/driver_input]`` (``fourws_ros.launcher.run_graph``
+    the maneuver node: ``topics: [/fourws/driver_input]`` (``fourws_ros.graph_run.run_graph``
     with ``replay_driver_from``). Like the maneuver node it publishes ``ManeuverStatus``, with
     ``done`` at the first state after the last recorded message, and then stays up.
 

@@ -8,7 +8,8 @@ same order*. The sequence, with ``Tc`` the control period, ``dt`` the integratio
 
 0. Setup. ``sim = Simulator(vehicle, model, integrator, dt)``;
    ``sim.reset(speed_mps=maneuver.initial_speed_mps)``;
-   ``law = make_law(law_name, belief_vehicle, **law_options)``;
+   ``law = make_loop_law(law_name, belief_vehicle, Tc, law_options)`` (the law is built for
+   the loop's period ``Tc``);
    ``actuator = RearSteerActuator(belief_vehicle)`` (the controller owns the actuator model, so
    its limits come from the vehicle file the controller is given; the belief vehicle is the
    simulated one unless a scenario says otherwise); ``maneuver = make_maneuver(spec, vehicle)``
@@ -154,7 +155,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     integrator : str
         Integrator name (``rk4``).
     law_options : mapping, optional
-        Options passed to ``make_law``.
+        Options of the law (``make_loop_law``; not ``control_period_s``, which is the loop's).
     tire : str, optional
         Tire model overriding the vehicle's (8-DOF only).
     max_ticks : int, optional
@@ -177,7 +178,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     A diverging simulation is not an error but the run's outcome: ``end_reason`` says where it
     diverged and the result holds every tick before.
     """
-    from fourws_control import RearSteerActuator, make_law
+    from fourws_control import RearSteerActuator, make_loop_law
     from fourws_sim.simulator import Simulator
 
     whole_multiple(control_period_s, dt_s, "control_period_s")
@@ -188,7 +189,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     sim.reset(speed_mps=man.initial_speed_mps)
     engine = TickEngine(sim, control_period_s)
     answers = LockstepAnswers(InputLimits.for_vehicle(vehicle))
-    law = make_law(law_name, belief, **dict(law_options or {}))
+    law = make_loop_law(law_name, belief, control_period_s, law_options)
     actuator = RearSteerActuator(belief)
 
     times: list[float] = []

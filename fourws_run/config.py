@@ -170,8 +170,10 @@ class RunConfig:
         return self.clock_mode == "lockstep"
 
     @property
-    def state_interval_s(self) -> float:
-        """Simulation time between two published states, s (lockstep: the control period)."""
+    def controller_period_s(self) -> float:
+        """Interval between the controller's answers, over which its command is held, s: it
+        answers every published state, in lockstep once per control period, in realtime once
+        per state period. The law is built for this period."""
         return self.control_period_s if self.lockstep else self.state_period_s
 
     def replace(self, **changes: Any) -> "RunConfig":
@@ -213,7 +215,7 @@ class RunConfig:
             "integration_step_s": self.integration_step_s,
             "control_period_s": self.control_period_s,
             "state_period_s": self.state_period_s, "clock_mode": self.clock_mode,
-            "speed_mps": self.speed_mps, "scenario": self.scenario,
+            "controller_period_s": self.controller_period_s, "speed_mps": self.speed_mps, "scenario": self.scenario,
             "recorded_topics": list(self.recorded_topics), "versions": dict(self.versions),
         }
 

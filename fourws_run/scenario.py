@@ -119,6 +119,13 @@ class Scenario:
         return self.belief.build(simulated)
 
     @property
+    def controller_period_s(self) -> float:
+        """Interval between the controller's answers, s, over which its command is held: it
+        answers every published state, in lockstep once per control period and in realtime
+        once per state period. The law is built for this period."""
+        return self.control_period_s if self.clock_mode == "lockstep" else self.state_period_s
+
+    @property
     def control_steps(self) -> int:
         """Integration steps per control period."""
         return int(round(self.control_period_s / self.integration_step_s))
@@ -221,6 +228,10 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     for law in law_options:
         if law not in laws_data:
             raise ParameterError(f"law_options.{law}", "names a law not in laws", source)
+        if "control_period_s" in law_options[law]:
+            # every law runs at the loop's period (fourws_control.make_loop_law)
+            raise ParameterError(f"law_options.{law}.control_period_s",
+                                 "is the scenario's control_period_s; set that instead", source)
 
     model = _string(data, "model", "8dof", source)
     if model not in _known_models():

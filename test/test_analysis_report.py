@@ -127,3 +127,45 @@ def test_run_without_vehicle_still_gives_data_metrics(tmp_path: Path) -> None:
     L = vehicle.chassis.wheelbase_m
     assert res.step.responses["yaw_rate_radps"].steady_state_gain == pytest.approx(
         SPEED / (L + vehicle.understeer_gradient_rad_per_mps2 * SPEED ** 2), rel=1e-3)
+
+
+def test_sampled_eigenvalues_of_an_lqr_run_at_50_hz(tmp_path: Path) -> None:
+    """An 8-DOF lqr run at 50 Hz control: the analysis rebuilds the law for the run's period
+    and closes each model as the controller does, the command held over 20 ms: the 2-DOF's
+    z-plane eigenvalues equal fourws_analysis.linear.sampled_closed_loop with the law the run
+    used, all inside the unit circle (discrete Riccati theory on the design model), their
+    s-plane map is ln(z)/T, and the report shows them."""
+    from fourws_analysis.compare import analyze_run
+    from fourws_analysis.linear import sampled_closed_loop
+    from fourws_analysis.report import write_report
+    from fourws_control import make_loop_law
+    from fourws_run.closed_loop import run_closed_loop
+    from fourws_sim.maneuvers import load_maneuver_spec
+    from fourws_sim.params import load_vehicle
+
+    car = load_vehicle("table_8_1")
+    spec = load_maneuver_spec("step_steer_85kmh").to_dict()
+    spec["duration_s"] = 3.0
+    res = run_closed_loop(car, spec, "lqr", control_period_s=0.02)
+    B.write_run(tmp_path / "lqr", res.time_s, res.outputs, res.config, driver=res.driver,
+                model="8dof")
+    ana = analyze_run(B.resample(B.load_bag(tmp_path / "lqr")), eig_sweep=False)
+    assert set(ana.sampled) == {"2dof", "3dof", "8dof-lin"}
+    loop = ana.sampled["2dof"]
+    assert loop.period_s == 0.02
+    law = make_loop_law("lqr", car, 0.02)
+    expected = sampled_closed_loop("2dof", car, law, ana.speed_mps)
+    np.testing.assert_allclose(np.sort_complex(loop.eigenvalues),
+                               np.sort_complex(expected.eigenvalues), rtol=1e-9)
+    assert loop.spectral_radius < 1.0
+    np.testing.assert_allclose(loop.s_plane, np.log(loop.eigenvalues) / 0.02, rtol=1e-12)
+    # the 8-DOF's speed mode stays at z = 1 (no drag at the trim); its lateral modes inside
+    eight = ana.sampled["8dof-lin"]
+    assert eight.spectral_radius == pytest.approx(1.0, abs=1e-9)
+    assert eight.radius(1e-6) < 1.0
+    metrics = ana.metrics()["model_sampled_eigenvalues"]
+    assert metrics["2dof"]["period_s"] == 0.02
+    assert len(metrics["8dof-lin"]["s_per_s"]) == ana.sampled["8dof-lin"].eigenvalues.size
+    assert metrics["8dof-lin"]["spectral_radius_s_nonzero"] == eight.radius(1e-6)
+    html = write_report([ana], tmp_path / "rep").read_text()
+    assert "2dof sampled at T: ln(z)/T (1/s)" in html and "8dof-lin sampled at T" in html

@@ -68,6 +68,7 @@ def test_belief_scaling_and_tire_override() -> None:
     ({"belief": {"scale": 2.0}}, "belief.scale"),
     ({"recording": {"topics": ["no_slash"]}}, "recording.topics"),
     ({"law_options": {"lqr": {}}}, "law_options.lqr"),
+    ({"law_options": {"sol1": {"control_period_s": 0.02}}}, "law_options.sol1.control_period_s"),
 ])
 def test_malformed_scenario_names_field_and_file(tmp_path: Path, change: dict,
                                                  field: str) -> None:
