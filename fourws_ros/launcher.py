@@ -577,6 +577,9 @@ def run_graph(scenario: Any, law: str, out_dir: Path, *, run_name: str | None = 
         stopped it; the recorder is always stopped last so the bag keeps what it has.
     """
     echo = echo or (lambda text: print(text, file=sys.stderr, flush=True))
+    # a step steer at a target lateral acceleration runs the amplitude found for this law
+    from fourws_sim.closed_loop import scenario_for_law
+    scenario = scenario_for_law(scenario, law)
     stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
     run_dir = Path(out_dir) / (run_name or f"{scenario.name}-{law}-{stamp}")
     if run_dir.exists():
