@@ -33,6 +33,9 @@ STEER_REFERENCE_FRACTION = 0.5
 STEADY_WINDOW_S = 1.0
 #: A step smaller than this fraction of the largest |steer| in the run is not a step.
 MIN_STEP_FRACTION = 0.5
+#: The straight-running baseline is taken before the steer leaves its initial value by this
+#: fraction of the step (noise on a recorded steer stays well below it).
+BASELINE_STEER_FRACTION = 0.01
 
 
 @dataclass
@@ -179,7 +182,12 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
             f"step metrics: steer held {hold_s:.2f} s after the step; need "
             f">= {2 * steady_window_s:.1f} s to reach a steady state")
     win = (t >= t[end - 1] - steady_window_s) & (t <= t[end - 1])
-    base_idx = t < t0 - 1e-12
+    # the straight-running baseline ends where the steer starts to move, not at t0: a law
+    # with a quick a_y response (direct feedthrough of the steer) has moved a_y by then, and
+    # averaging the first half of the ramp into the baseline shifted its steady state by 1 %
+    steer_dev = np.abs(np.asarray(steer, dtype=float) - float(np.asarray(steer)[0]))
+    moving = np.nonzero(steer_dev > BASELINE_STEER_FRACTION * abs(step))[0]
+    base_idx = np.arange(t.size) < (moving[0] if moving.size else 0)
     steer_ss = float(np.mean(np.asarray(steer)[win])) - float(np.asarray(steer)[0])
     hand_ss = None
     if steering_wheel_rad is not None:

@@ -313,12 +313,12 @@ def find_step_amplitude(evaluate: Callable[[float], float], target_mps2: float,
     """The step amplitude ``x > 0`` whose steady lateral acceleration is ``target_mps2``.
 
     Solves ``evaluate(x) = target`` (``evaluate``: amplitude -> steady |a_y|, m/s^2, or
-    ``inf`` when the run diverges or does not settle) by the secant method safeguarded by bisection: the first
-    step is proportional (the secant through the origin, exact for a linear car, where
-    ``a_y(0) = 0``), later steps are secants through the last two points; a step that leaves
-    the bracket ``[largest x below the target, smallest x above it]`` is replaced by its
-    midpoint (or, before any point above the target, by doubling). Saturating tires make
-    ``a_y(x)`` concave, so the secant converges from below in a few runs.
+    ``inf`` when the run diverges or does not settle) by the secant method safeguarded by
+    bisection: the first step is proportional (the secant through the origin, exact for a
+    linear car, where ``a_y(0) = 0``), later steps are secants through the last two points;
+    a step that leaves the bracket ``[largest x below the target, smallest x above it]`` is
+    replaced by its midpoint (or, before any point above the target, by doubling). Saturating
+    tires make ``a_y(x)`` concave, so the secant converges from below in a few runs.
 
     Parameters
     ----------

@@ -50,7 +50,8 @@ def test_report_and_metrics_of_a_step_run(tmp_path: Path, capsys) -> None:
     vehicle = vehicle_from_mapping(SET_1)
     L = vehicle.chassis.wheelbase_m
     expected = SPEED / (L + vehicle.understeer_gradient_rad_per_mps2 * SPEED ** 2)
-    gain = metrics["iso7401_step"]["yaw_rate_radps"]["steady_state_gain"]
+    yaw = metrics["iso7401_step"]["yaw_rate_radps"]
+    gain = yaw["steady_state_gain_radps_per_rad_road_wheel"]
     assert gain == pytest.approx(expected, rel=1e-3)
     for pair in metrics["identified_vs_model"]["2dof"]:
         assert pair["relative_difference"] < 0.01
@@ -66,7 +67,7 @@ def test_json_output_and_partial_results_with_a_missing_bag(tmp_path: Path, caps
     out, err = capsys.readouterr()
     assert rc == 1
     data = json.loads(out)
-    assert data["runs"]["step"]["iso7401_step"]["yaw_rate_radps"]["overshoot"] > 0.0
+    assert data["runs"]["step"]["iso7401_step"]["yaw_rate_radps"]["overshoot_fraction"] > 0.0
     assert "missing" in err and "does not exist" in err and "Traceback" not in err
 
 
