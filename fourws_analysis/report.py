@@ -202,7 +202,8 @@ def stability_notes(members: Sequence[RunAnalysis]) -> list[str]:
         return []
     first = members[0]
     speed = first.speed_mps
-    unstable: list[str] = []   # short: what is unstable
+    unstable: list[str] = []   # short: what is unstable at the run speed
+    elsewhere = ""             # the sweep's unstable speeds
     details: list[str] = []
     sweep = first.eig_sweep
     if sweep is not None:
@@ -216,7 +217,7 @@ def stability_notes(members: Sequence[RunAnalysis]) -> list[str]:
             k0 = int(np.argmax(bad))
             where = (f"from {v[k0]:.3g} m/s ({v[k0] * 3.6:.0f} km/h) up" if np.all(bad[k0:])
                      else "at " + ", ".join(f"{x:.3g}" for x in v[bad]) + " m/s")
-            unstable.append(f"8-DOF linearized {where}")
+            elsewhere = f"8-DOF linearized {where}"
             details.append(f"8-DOF linearized over {v.min():.3g}-{v.max():.3g} m/s: a mode "
                            f"right of the imaginary axis {where}, largest real part "
                            f"{worst[k]:+.3g} 1/s at {v[k]:.3g} m/s.")
@@ -236,12 +237,10 @@ def stability_notes(members: Sequence[RunAnalysis]) -> list[str]:
             details.append(f"Identified from {run_label(r)}: "
                            f"{_fmt_eigs(_unstable(r.modes.eigenvalues))} 1/s right of the "
                            "axis: the recorded run itself diverges.")
-    at_speed = [u for u in unstable if not u.startswith("8-DOF linearized ")]
-    if at_speed:
-        head = "Unstable: " + "; ".join(at_speed) + "."
-    elif unstable:
-        head = (f"Stable at {speed:.3g} m/s; unstable at other speeds: "
-                + "; ".join(unstable) + ".")
+    if unstable:
+        head = "Unstable: " + "; ".join(unstable) + "."
+    elif elsewhere:
+        head = f"Stable at {speed:.3g} m/s; unstable at other speeds: {elsewhere}."
     else:
         head = f"No mode right of the imaginary axis at {speed:.3g} m/s."
     return [head] + details
