@@ -147,11 +147,33 @@ def reading_notes(runs: Sequence[RunAnalysis]) -> list[str]:
 
 
 def _comparison_notes(runs: Sequence[RunAnalysis]) -> list[str]:
-    """Equal steer or equal lateral acceleration, for the step runs of ``runs``."""
+    """Equal steer or equal lateral acceleration, for the step runs and for the frequency
+    runs of ``runs``."""
+    notes = _frequency_comparison(runs)
     steps = [r for r in runs if r.step is not None
              and "lateral_accel_mps2" in r.step.responses]
     if len(steps) < 2:
+        return notes
+    return _step_comparison(steps) + notes
+
+
+def _frequency_comparison(runs: Sequence[RunAnalysis]) -> list[str]:
+    """The a_y gains of frequency runs with the same input differ between laws: say by how
+    much (steady-state gain per δf)."""
+    key = f"lateral_accel_mps2/{units.ROAD_WHEEL.channel}"
+    fr = {run_label(r): r.frequency_metrics[key].steady_state_gain for r in runs
+          if key in r.frequency_metrics and r.frequency_metrics[key].steady_state_gain > 0}
+    if len(fr) < 2:
         return []
+    lo, hi = min(fr, key=fr.__getitem__), max(fr, key=fr.__getitem__)
+    return [f"Frequency responses: a given steer gives each law its own lateral "
+            f"acceleration; the steady-state a_y gain ranges from "
+            f"{fr[lo]:.4g} (m/s²)/rad ({lo}) to {fr[hi]:.4g} (m/s²)/rad ({hi}), "
+            f"×{fr[hi] / fr[lo]:.2f}."]
+
+
+def _step_comparison(steps: Sequence[RunAnalysis]) -> list[str]:
+    """Equal steer or equal lateral acceleration, for step runs (two or more)."""
     targets = [r.step_amplitude.get("target_lateral_accel_mps2") for r in steps]
     if all(t is not None for t in targets):
         amps = ", ".join(f"{_deg(abs(r.step.steer_step))} ({run_label(r)})" for r in steps)
@@ -163,10 +185,12 @@ def _comparison_notes(runs: Sequence[RunAnalysis]) -> list[str]:
           for r in steps}
     lo_name, hi_name = min(ay, key=ay.__getitem__), max(ay, key=ay.__getitem__)
     steer = sorted({round(math.degrees(abs(r.step.steer_step)), 3) for r in steps})
-    same = (f"the same front road-wheel step, {steer[0]:g} deg," if len(steer) == 1
-            else "front road-wheel steps of " + ", ".join(f"{s:g}" for s in steer) + " deg")
+    how = (f"Step runs compared at equal steer (the same front road-wheel step, "
+           f"{steer[0]:g} deg, for every law)" if len(steer) == 1 else
+           "Step runs with given amplitudes (front road-wheel steps of "
+           + ", ".join(f"{x:g}" for x in steer) + " deg)")
     spread = ay[hi_name] / ay[lo_name] if ay[lo_name] > 0 else math.inf
-    return [f"Step runs compared at equal steer ({same} for every law): the steady lateral "
+    return [f"{how}: the steady lateral "
             f"acceleration then differs between laws, from {ay[lo_name]:.3g} m/s² "
             f"({lo_name}) to {ay[hi_name]:.3g} m/s² ({hi_name}), ×{spread:.2f}, so the "
             "gains come from different points of the tires' curves. ISO 7401 compares at one "

@@ -271,8 +271,9 @@ def test_the_report_says_what_the_gains_are_per_and_how_laws_compare(engineer: d
     """The top of the report says, once: gains per the commanded δf and per δH (N = 16.3,
     20 log10 16.3 = 24.2 dB); the applied angle's roll steer, whose steady share is
     ε_f φ / δf (table_8_1's roll_steer_front ε_f = 0.2, the steady roll and command of the
-    fws step); and that the step runs are compared at equal steer, with the spread of their
-    steady lateral accelerations (the ratio of the two runs' a_y in metrics.json)."""
+    fws step); that the step runs are compared at equal steer, with the spread of their
+    steady lateral accelerations (the ratio of the two runs' a_y in metrics.json); and the
+    spread of the frequency runs' steady-state a_y gains."""
     text = engineer["html"]
     top = text[text.index("How to read"):text.index("<h2>Metrics")]
     assert text.count("How to read") == 1
@@ -288,6 +289,10 @@ def test_the_report_says_what_the_gains_are_per_and_how_laws_compare(engineer: d
                  ["steady_state_mps2"]) for n in ("fws", "sol1")}
     assert "equal steer" in top and f"×{ay['fws'] / ay['sol1']:.2f}" in top
     assert ay["fws"] / ay["sol1"] > 2.5  # the issue's 2.8x, here with the same 1.5 deg step
+    key = "lateral_accel_mps2/front_wheel_angle_rad"
+    gain = {n: engineer["metrics"][f"frequency_response-{n}"]["frequency_response"][key][
+        U.gain_key("lateral_accel_mps2", "front_wheel_angle_rad")] for n in ("fws", "sol1")}
+    assert f"×{gain['fws'] / gain['sol1']:.2f}." in top
 
 
 def _lateral(eig: np.ndarray) -> np.ndarray:
