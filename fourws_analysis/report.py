@@ -810,7 +810,7 @@ def _list_html(items: Sequence[str], cls: str = "") -> str:
 
 def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
                  failures: dict[str, str] | None = None,
-                 progress: Progress | None = None) -> Path:
+                 progress: Progress | None = None, plots: bool = True) -> Path:
     """Write ``index.html``, the PNG plots and ``metrics.json`` into ``out_dir``.
 
     Parameters
@@ -820,6 +820,11 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
         Folder (created if needed).
     failures : dict of str to str, optional
         Bags that could not be read -> why (listed in the report and the JSON).
+    progress : callable, optional
+        Called with a short description before each plot.
+    plots : bool
+        Draw the PNG plots (False: texts, tables and metrics only, in a fraction of the
+        time).
 
     Returns
     -------
@@ -830,34 +835,37 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     sections: list[tuple[str, Path | None, str, list[str]]] = []
-    plots = (("Frequency response", plot_bode, "bode.png",
-              "Measured H1 estimate (solid) over the analytic 2-DOF/3-DOF models closed with "
-              "the run's law and the 8-DOF linearized at the run's straight-running trim; "
-              "one colour per run, one line style per source. Phase lines are not joined "
-              "across a jump of more than 90 deg (a wrap or a zero on the jω axis).", []),
-             ("ISO 7401 step response", plot_step, "step.png", "", []),
-             ("ISO 4138 steady-state handling", plot_steady_state, "steady_state.png", "", []))
+    figures = (("Frequency response", plot_bode, "bode.png",
+                "Measured H1 estimate (solid) over the analytic 2-DOF/3-DOF models closed "
+                "with the run's law and the 8-DOF linearized at the run's straight-running "
+                "trim; one colour per run, one line style per source. Phase lines are not "
+                "joined across a jump of more than 90 deg (a wrap or a zero on the jω axis)."),
+               ("ISO 7401 step response", plot_step, "step.png", ""),
+               ("ISO 4138 steady-state handling", plot_steady_state, "steady_state.png", ""))
+
+    def draw(fn: Callable[[Sequence[RunAnalysis], Path], Path | None],
+             members: Sequence[RunAnalysis], fname: str) -> Path | None:
+        tick(f"plot {fname}")
+        return fn(members, out / fname) if plots else None
+
     if runs:
         # time histories: one figure per maneuver, so a 60 s sweep does not flatten a 5 s step
         groups: dict[str, list[RunAnalysis]] = {}
         for r in runs:
             groups.setdefault(r.run.maneuver or "unrecognized", []).append(r)
         for man, members in groups.items():
-            tick(f"plot time histories {man}")
             sections.append((f"Time histories: {man}",
-                             plot_time_histories(members, out / f"time_histories_{man}.png"),
+                             draw(plot_time_histories, members, f"time_histories_{man}.png"),
                              "Overlaid runs; time from the start of each record. The front "
                              "road-wheel angle is drawn as applied (solid, roll steer "
                              "included) and as the driver commands it (dashed).", []))
-        for title, fn, fname, caption, items in plots:
-            tick(f"plot {fname}")
-            sections.append((title, fn(runs, out / fname), caption, items))
-        tick("plot eigenvalues.png")
+        for title, fn, fname, caption in figures:
+            sections.append((title, draw(fn, runs, fname), caption, []))
         eig_items = [f"Law {law}: " + " ".join(stability_notes(members))
                      for law, members in _law_groups(runs).items()]
         eig_items += identification_notes(runs)
         sections.append(("Stability: eigenvalues",
-                         plot_eigenvalues(runs, out / "eigenvalues.png"),
+                         draw(plot_eigenvalues, runs, "eigenvalues.png"),
                          "One panel per law. Modes faster than -40 1/s (wheel spin, tire lag, "
                          "actuator) are left out; a mode right of the imaginary axis "
                          "(shaded) is unstable.", eig_items))
@@ -877,11 +885,11 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
         parts.append("<h2>Metrics</h2>" + "".join(
             _table_html(title, rows, runs) for title, rows in metric_tables(runs)))
     for title, png, caption, items in sections:
-        if png is None:
+        if png is None and not items:
             continue
+        img = f"<img src='{png.name}' alt='{html.escape(title)}'>" if png is not None else ""
         parts.append(f"<h2>{html.escape(title)}</h2><p class='note'>{html.escape(caption)}</p>"
-                     f"<img src='{png.name}' alt='{html.escape(title)}'>"
-                     + (_list_html(items) if items else ""))
+                     + img + (_list_html(items) if items else ""))
     for r in runs:
         if r.unavailable or r.notes:
             parts.append(f"<h2>Not computed for {html.escape(run_label(r))}</h2><ul>"

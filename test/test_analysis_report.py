@@ -189,7 +189,8 @@ class _Tables(HTMLParser):
 def engineer(tmp_path_factory: pytest.TempPathFactory) -> dict:
     """Offline 8-DOF runs of three shipped scenarios (the default step at equal steer, the
     swept sine shortened to 0.2-3 Hz over 15 s, the ISO 4138 slow ramp), fws and sol1 each,
-    written as bags, analysed and reported as ``fourws analyze --report`` does."""
+    written as bags, analysed and reported as ``fourws analyze --report`` does (without
+    drawing the PNGs)."""
     root = tmp_path_factory.mktemp("engineer")
     analyses = []
     for name, changes in ENGINEER_SCENARIOS:
@@ -200,7 +201,8 @@ def engineer(tmp_path_factory: pytest.TempPathFactory) -> dict:
         for law in scenario.laws:
             bag = write_offline_bag(run_scenario(scenario, law), root / f"{name}-{law}")
             analyses.append(analyze_run(B.resample(B.load_bag(bag))))
-    index = R.write_report(analyses, root / "report")
+    # texts, tables and metrics.json; the figures are built by the tests that look at them
+    index = R.write_report(analyses, root / "report", plots=False)
     parser = _Tables()
     parser.feed(index.read_text())
     return {"runs": analyses, "html": index.read_text(), "tables": parser.tables,
@@ -305,15 +307,27 @@ def _legends(fig) -> list:
     return list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
 
 
-@pytest.mark.parametrize("figure", ["time_histories", "bode", "step", "steady_state",
-                                    "eigenvalues"])
-def test_legends_stay_off_the_data_and_do_not_repeat(engineer: dict, figure: str) -> None:
-    """No legend lies over a plotting area (its box does not overlap any axes' box once
-    drawn), and no label repeats itself as ``x (x)``."""
+FIGURES = ("time_histories", "bode", "step", "steady_state", "eigenvalues")
+
+
+@pytest.fixture(scope="module")
+def figures(engineer: dict):
+    """Every figure of the report of ``engineer``, drawn (layout done), by name."""
     import matplotlib.pyplot as plt
 
-    fig = getattr(R, f"figure_{figure}")(engineer["runs"])
-    fig.canvas.draw()
+    figs = {name: getattr(R, f"figure_{name}")(engineer["runs"]) for name in FIGURES}
+    for fig in figs.values():
+        fig.canvas.draw()
+    yield figs
+    for fig in figs.values():
+        plt.close(fig)
+
+
+@pytest.mark.parametrize("figure", FIGURES)
+def test_legends_stay_off_the_data_and_do_not_repeat(figures: dict, figure: str) -> None:
+    """No legend lies over a plotting area (its box does not overlap any axes' box once
+    drawn), and no label repeats itself as ``x (x)``."""
+    fig = figures[figure]
     legends = _legends(fig)
     assert legends
     for legend in legends:
@@ -326,16 +340,13 @@ def test_legends_stay_off_the_data_and_do_not_repeat(engineer: dict, figure: str
             label = t.get_text()
             head = label.split(" (")[0]
             assert label != f"{head} ({head})", label
-    plt.close(fig)
 
 
-def test_bode_phase_lines_never_jump(engineer: dict) -> None:
+def test_bode_phase_lines_never_jump(figures: dict) -> None:
     """In every phase panel of the Bode figure, neighbouring drawn points differ by at most
     PHASE_BREAK_DEG (90 deg; a wrap is 360, and any jump over 180 is a branch artefact); the
     trusted measured phase is drawn for every run and output."""
-    import matplotlib.pyplot as plt
-
-    fig = R.figure_bode(engineer["runs"])
+    fig = figures["bode"]
     phase_axes = [ax for ax in fig.axes if ax.get_ylabel() == "phase (deg)"]
     assert len(phase_axes) == 4
     drawn = 0
@@ -347,7 +358,6 @@ def test_bode_phase_lines_never_jump(engineer: dict) -> None:
                 assert np.max(np.abs(np.diff(y))[both]) <= PHASE_BREAK_DEG, ax.get_title()
                 drawn += 1
     assert drawn >= 4 * 2 * 2  # per output: 2 runs x (measured + at least one model)
-    plt.close(fig)
 
 
 def test_eigenvalue_texts_comment_on_unstable_modes(engineer: dict) -> None:
