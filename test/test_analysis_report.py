@@ -136,7 +136,10 @@ from html.parser import HTMLParser  # noqa: E402
 
 from fourws_analysis import units as U  # noqa: E402
 from fourws_analysis import report as R  # noqa: E402
-from fourws_analysis.compare import analyze_run, eightdof_linear_system  # noqa: E402
+from fourws_analysis import report_figures as RF  # noqa: E402
+from fourws_analysis import report_texts as RT  # noqa: E402
+from fourws_analysis.compare import (RunAnalysis, analyze_run,  # noqa: E402
+                                     eightdof_linear_system)
 from fourws_analysis.frequency import PHASE_BREAK_DEG  # noqa: E402
 from fourws_sim.closed_loop import run_scenario  # noqa: E402
 from fourws_sim.params import load_vehicle  # noqa: E402
@@ -315,7 +318,7 @@ def figures(engineer: dict):
     """Every figure of the report of ``engineer``, drawn (layout done), by name."""
     import matplotlib.pyplot as plt
 
-    figs = {name: getattr(R, f"figure_{name}")(engineer["runs"]) for name in FIGURES}
+    figs = {name: getattr(RF, f"figure_{name}")(engineer["runs"]) for name in FIGURES}
     for fig in figs.values():
         fig.canvas.draw()
     yield figs
@@ -373,7 +376,7 @@ def test_eigenvalue_texts_comment_on_unstable_modes(engineer: dict) -> None:
     import re
 
     fws = [r for r in engineer["runs"] if r.name == "default-fws"]
-    notes = R.stability_notes(fws)
+    notes = RT.stability_notes(fws)
     assert notes[0].startswith("Stable at 23.6 m/s; unstable at other speeds")
     speed = float(re.search(r"from ([0-9.]+) m/s", notes[0]).group(1))
     car = load_vehicle("table_8_1")
@@ -381,12 +384,12 @@ def test_eigenvalue_texts_comment_on_unstable_modes(engineer: dict) -> None:
              for v in (speed - 2.5, speed)]
     assert worst[0] < 0.0 < worst[1]
     sol2 = eightdof_linear_system(car, 60 / 3.6, "sol2")
-    fake = R.RunAnalysis(run=fws[0].run, speed_mps=60 / 3.6, models={"8dof-lin": sol2})
-    head = R.stability_notes([fake])[0]
+    fake = RunAnalysis(run=fws[0].run, speed_mps=60 / 3.6, models={"8dof-lin": sol2})
+    head = RT.stability_notes([fake])[0]
     top = max(_lateral(sol2.eigenvalues).real)
     assert head.startswith("Unstable: 8-DOF linearized at 16.7 m/s") and top > 0.0
-    assert f"{top:+.3g}" in " ".join(R.stability_notes([fake]))
-    ident = " ".join(R.identification_notes(fws))
+    assert f"{top:+.3g}" in " ".join(RT.stability_notes([fake]))
+    ident = " ".join(RT.identification_notes(fws))
     assert "beyond the ~4 m/s²" in ident and "two-pole fit" in ident
     assert "Stable at 23.6 m/s" in engineer["html"]
 
