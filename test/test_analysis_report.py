@@ -5,14 +5,24 @@ from __future__ import annotations
 
 import json
 import math
+import re
+from html.parser import HTMLParser
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from fourws_analysis import bag as B
+from fourws_analysis import report as R
+from fourws_analysis import report_figures as RF
+from fourws_analysis import report_texts as RT
+from fourws_analysis import units as U
+from fourws_analysis.compare import RunAnalysis, analyze_run, eightdof_linear_system
+from fourws_analysis.frequency import PHASE_BREAK_DEG
 from fourws_cli.main import main
-from fourws_sim.params import vehicle_from_mapping
+from fourws_sim.closed_loop import run_scenario
+from fourws_sim.params import load_vehicle, vehicle_from_mapping
+from fourws_sim.scenario import load_scenario
 
 from test_analysis_frequency import SET_1, simulate_2dof
 
@@ -130,20 +140,7 @@ def test_run_without_vehicle_still_gives_data_metrics(tmp_path: Path) -> None:
         SPEED / (L + vehicle.understeer_gradient_rad_per_mps2 * SPEED ** 2), rel=1e-3)
 
 
-# ---------------------------------------------------------------- the report as an engineer reads it
-
-from html.parser import HTMLParser  # noqa: E402
-
-from fourws_analysis import units as U  # noqa: E402
-from fourws_analysis import report as R  # noqa: E402
-from fourws_analysis import report_figures as RF  # noqa: E402
-from fourws_analysis import report_texts as RT  # noqa: E402
-from fourws_analysis.compare import (RunAnalysis, analyze_run,  # noqa: E402
-                                     eightdof_linear_system)
-from fourws_analysis.frequency import PHASE_BREAK_DEG  # noqa: E402
-from fourws_sim.closed_loop import run_scenario  # noqa: E402
-from fourws_sim.params import load_vehicle  # noqa: E402
-from fourws_sim.scenario import load_scenario  # noqa: E402
+# ------------------------------------------------------- the report as an engineer reads it
 
 #: Shipped scenarios analysed together, with the changes that keep the test short.
 ENGINEER_SCENARIOS = (
@@ -373,8 +370,6 @@ def test_eigenvalue_texts_comment_on_unstable_modes(engineer: dict) -> None:
       headline says Unstable with that eigenvalue;
     * the identification note explains the fws step's difference by its amplitude (peak
       |a_y| 6.4 m/s² > 4)."""
-    import re
-
     fws = [r for r in engineer["runs"] if r.name == "default-fws"]
     notes = RT.stability_notes(fws)
     assert notes[0].startswith("Stable at 23.6 m/s; unstable at other speeds")
