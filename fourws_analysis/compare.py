@@ -43,6 +43,14 @@ SWEEP_SPEEDS_MPS = tuple(float(v) for v in np.arange(5.0, 40.01, 2.5))
 #: Driver inputs the frequency response is taken against.
 FR_INPUTS = ("front_wheel_angle_rad", "steering_wheel_angle_rad")
 
+#: What the front road-wheel angle δf of the gains is, by ``RunAnalysis.steer_reference``.
+STEER_REFERENCES = {
+    "commanded": "the driver's front road-wheel command (/fourws/driver_input); the applied "
+                 "angle adds roll steer",
+    "applied": "the applied front road-wheel angle (/fourws/state), roll steer included: the "
+               "bag has no /fourws/driver_input",
+}
+
 Progress = Callable[[str], None]
 #: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options.
 _SWEEP_CACHE: dict[str, Any] = {}
@@ -71,6 +79,15 @@ class RunAnalysis:
     unavailable : dict of str to str
         Metric -> why it could not be computed.
     notes : list of str
+    steer_reference : str
+        Which front road-wheel angle δf the gains are per: ``"commanded"`` (the driver's
+        command, ``/fourws/driver_input``) or ``"applied"`` (``/fourws/state``, roll steer
+        included: the bag has no driver input).
+    steering_ratio : float or None
+        N of the run's vehicle (steering-wheel angle δH = N δf).
+    applied_to_commanded : float or None
+        Applied over commanded front angle at the end of a step's hold: 1 + the roll-steer
+        share (step runs with both angles recorded).
     """
 
     run: UniformRun
@@ -86,6 +103,9 @@ class RunAnalysis:
     eig_sweep: linearize.EigenSweep | None = None
     unavailable: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    steer_reference: str = "applied"
+    steering_ratio: float | None = None
+    applied_to_commanded: float | None = None
 
     @property
     def name(self) -> str:
@@ -100,6 +120,21 @@ class RunAnalysis:
             law = law.get("name", law.get("type", "fws"))
         return str(law or "fws")
 
+    @property
+    def step_amplitude(self) -> dict[str, Any]:
+        """How the step amplitude of a step_steer run was chosen (empty for other runs):
+        ``amplitude_rad`` (in ``steer_input`` units), ``steer_input``, and with a target
+        ``target_lateral_accel_mps2`` and ``found_for_law``."""
+        man = self.run.config.get("maneuver")
+        if not isinstance(man, Mapping) or man.get("type") != "step_steer":
+            return {}
+        out = {"amplitude_rad": man.get("amplitude_rad"),
+               "steer_input": man.get("steer_input", "road_wheel")}
+        if man.get("target_lateral_accel_mps2") is not None:
+            out["target_lateral_accel_mps2"] = man["target_lateral_accel_mps2"]
+            out["found_for_law"] = man.get("amplitude_law") or None
+        return out
+
     def metrics(self) -> dict[str, Any]:
         """Every metric as a JSON-ready mapping."""
         out: dict[str, Any] = {
@@ -107,7 +142,16 @@ class RunAnalysis:
             "model": self.run.config.get("model"), "speed_mps": self.speed_mps,
             "duration_s": float(self.run.time_s[-1] - self.run.time_s[0]),
             "sample_period_s": self.run.dt_s,
+            "gain_reference": {
+                "road_wheel_angle": self.steer_reference,
+                "road_wheel_angle_meaning": STEER_REFERENCES[self.steer_reference],
+                "steering_ratio": self.steering_ratio,
+                "steering_wheel_angle": "delta_H = steering_ratio * delta_f",
+                "applied_to_commanded_front_angle": self.applied_to_commanded,
+            },
         }
+        if self.step_amplitude:
+            out["step_amplitude"] = self.step_amplitude
         if self.frequency_metrics:
             out["frequency_response"] = {k: v.to_dict()
                                          for k, v in self.frequency_metrics.items()}
@@ -333,14 +377,13 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
     if "front_wheel_angle_cmd_rad" in ch:
         # the driver's command is the models' input; the applied angle includes roll steer
         ch["front_wheel_angle_rad"] = ch["front_wheel_angle_cmd_rad"]
-        res.notes.append("front road-wheel angle = the driver's command (/fourws/driver_input)")
-    elif "front_wheel_angle_rad" in ch:
-        res.notes.append("no /fourws/driver_input: front road-wheel angle = the applied angle "
-                         "of /fourws/state (includes any roll steer)")
+        res.steer_reference = "commanded"
 
     tick(f"{run.name}: linear models")
     vehicle = _try(res, "model_overlays", lambda: _vehicle(run))
     res.vehicle = vehicle
+    if vehicle is not None and vehicle.steering is not None:
+        res.steering_ratio = float(vehicle.steering.ratio)
     belief = _try(res, "belief_vehicle", lambda: _vehicle(run, "belief_vehicle")) \
         if isinstance(run.config.get("belief_vehicle"), Mapping) else None
     options = run.config.get("law_options") or {}
@@ -400,7 +443,16 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
         if man in STEP_MANEUVERS:
             responses = {k: ch[k] for k in ("yaw_rate_radps", "lateral_accel_mps2") if k in ch}
             res.step = _try(res, "iso7401_step", lambda: iso7401.step_metrics(
-                t, ch["front_wheel_angle_rad"], responses, ch.get("sideslip_rad")))
+                t, ch["front_wheel_angle_rad"], responses, ch.get("sideslip_rad"),
+                steering_wheel_rad=ch.get("steering_wheel_angle_rad")))
+            if res.step is not None and res.steer_reference == "commanded":
+                win = (t >= res.step.hold_end_s - iso7401.STEADY_WINDOW_S) \
+                    & (t <= res.step.hold_end_s)
+                applied = run.channels["front_wheel_angle_rad"]
+                cmd = ch["front_wheel_angle_rad"]
+                den = float(np.mean(cmd[win]) - cmd[0])
+                if den != 0.0:
+                    res.applied_to_commanded = float(np.mean(applied[win]) - applied[0]) / den
         outs = [ch[k] for k in ("yaw_rate_radps", "lateral_velocity_mps") if k in ch]
         res.modes = _try(res, "identified_modes", lambda: identify.identify_modes(
             t, ch["front_wheel_angle_rad"], outs, order=2))
@@ -422,7 +474,9 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
                 ch["yaw_rate_radps"][settle], ch["speed_mps"][settle],
                 vehicle.chassis.wheelbase_m,
                 ch["sideslip_rad"][settle] if "sideslip_rad" in ch else None,
-                ch["roll_rad"][settle] if "roll_rad" in ch else None)
+                ch["roll_rad"][settle] if "roll_rad" in ch else None,
+                steering_wheel_rad=ch["steering_wheel_angle_rad"][settle]
+                if "steering_wheel_angle_rad" in ch else None)
         res.steady = _try(res, "iso4138_steady_state", steady)
     else:
         res.unavailable["iso4138_steady_state"] = (

@@ -27,6 +27,7 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import signal
 
+from fourws_analysis import units
 from fourws_analysis.bag import MetricUnavailableError
 
 #: Coherence above which an estimated point is trusted (ISO 7401 asks for "good" coherence;
@@ -47,13 +48,8 @@ DC_LIMIT_HZ = 1e-6
 #: Default Welch segment length, s: 0.1 Hz resolution.
 DEFAULT_SEGMENT_S = 10.0
 
-#: Outputs analysed: channel name of the run -> label, unit.
-OUTPUTS: dict[str, tuple[str, str]] = {
-    "yaw_rate_radps": ("yaw rate", "1/s"),
-    "lateral_accel_mps2": ("lateral acceleration", "m/s^2/rad"),
-    "sideslip_rad": ("sideslip", "rad/rad"),
-    "roll_rad": ("roll", "rad/rad"),
-}
+#: Outputs analysed (channel names; labels and units in :data:`fourws_analysis.units.OUTPUTS`).
+OUTPUTS: tuple[str, ...] = tuple(units.OUTPUTS)
 
 
 @dataclass
@@ -134,6 +130,8 @@ class ResponseMetrics:
         Trusted frequency band (lowest, highest), Hz.
     notes : list of str
         Why a metric is missing.
+    output, input : str
+        Channel names of the response (they name the gain's unit).
     """
 
     steady_state_gain: float
@@ -143,10 +141,12 @@ class ResponseMetrics:
     bandwidth_hz: float | None
     band_hz: tuple[float, float]
     notes: list[str] = field(default_factory=list)
+    output: str = ""
+    input: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready mapping."""
-        return {"steady_state_gain": self.steady_state_gain,
+        """JSON-ready mapping; the gain's key names its unit (:func:`units.gain_key`)."""
+        return {units.gain_key(self.output, self.input): self.steady_state_gain,
                 "resonance_ratio": self.resonance_ratio,
                 "resonance_freq_hz": self.resonance_freq_hz,
                 "phase_lag_1hz_deg": self.phase_lag_1hz_deg,
@@ -277,6 +277,47 @@ def _unwrapped_phase_deg(response: np.ndarray) -> np.ndarray:
     return np.degrees(ph)
 
 
+#: Neighbouring points of a drawn phase curve further apart than this are not joined, deg.
+#: A jump over 180 deg is always a branch artefact (the nearest branch is within 180 deg);
+#: 90 deg also breaks the near-vertical swing at an input or model zero on the jw axis,
+#: where the phase is undefined. A smooth curve sampled as densely as the plots are (300
+#: points over 2.5 decades) turns by at most a few degrees per point unless a pole or zero
+#: has a damping ratio below ~0.01.
+PHASE_BREAK_DEG = 90.0
+
+
+def display_phase_deg(fr: FrequencyResponse,
+                      coherence_min: float = COHERENCE_MIN) -> np.ndarray:
+    """Phase of ``fr`` for drawing, deg: the trusted points unwrapped among themselves (as
+    :func:`response_metrics` does), each untrusted point put on the branch nearest the
+    closest trusted point before it (after it, below the trusted band). An untrusted point
+    (an input zero, noise) can turn by any angle; unwrapping through it would move every
+    later trusted point by 360 deg, and unwrapping noise drifts by hundreds of degrees."""
+    ok = fr.trusted(coherence_min)
+    raw = np.degrees(np.angle(fr.response))
+    out = np.full(raw.shape, np.nan)
+    if not np.any(ok):
+        return raw
+    idx = np.nonzero(ok)[0]
+    out[idx] = _unwrapped_phase_deg(fr.response[idx])
+    for i in np.nonzero(~ok & np.isfinite(raw))[0]:
+        before = idx[idx < i]
+        ref = out[before[-1]] if before.size else out[idx[0]]
+        out[i] = raw[i] + 360.0 * round((ref - raw[i]) / 360.0)
+    return out
+
+
+def break_phase_jumps(x: np.ndarray, phase_deg: np.ndarray,
+                      max_jump_deg: float = PHASE_BREAK_DEG) -> tuple[np.ndarray, np.ndarray]:
+    """``(x, phase)`` with a NaN inserted between neighbours more than ``max_jump_deg``
+    apart, so a line plot leaves the gap open instead of drawing a vertical line."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(phase_deg, dtype=float)
+    with np.errstate(invalid="ignore"):
+        jumps = np.nonzero(np.abs(np.diff(y)) > max_jump_deg)[0] + 1
+    return np.insert(x, jumps, np.nan), np.insert(y, jumps, np.nan)
+
+
 def response_metrics(fr: FrequencyResponse, coherence_min: float = COHERENCE_MIN,
                      phase_freq_hz: float = PHASE_LAG_FREQ_HZ) -> ResponseMetrics:
     """Steady-state gain, resonance, phase lag at 1 Hz and -3 dB bandwidth of ``fr``.
@@ -326,7 +367,8 @@ def response_metrics(fr: FrequencyResponse, coherence_min: float = COHERENCE_MIN
             bw = float(np.interp(HALF_POWER_DB, [rel_db[k], rel_db[k - 1]], [f[k], f[k - 1]]))
     else:
         notes.append("gain stays within 3 dB of its steady-state value over the trusted band")
-    return ResponseMetrics(g0, res_ratio, res_f, lag, bw, (float(f[0]), float(f[-1])), notes)
+    return ResponseMetrics(g0, res_ratio, res_f, lag, bw, (float(f[0]), float(f[-1])), notes,
+                           fr.output, fr.input)
 
 
 # --------------------------------------------------------------------------------------------

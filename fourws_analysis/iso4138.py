@@ -47,6 +47,9 @@ class SteadyStateHandling:
         K_us, rad/(m/s^2); > 0 understeer.
     steer_gradient_rad_per_mps2 : float
         d(delta_f)/d(a_y), rad/(m/s^2) (includes the Ackermann part at constant speed).
+    steering_wheel_gradient_rad_per_mps2 : float or None
+        d(delta_H)/d(a_y), rad/(m/s^2): ISO 4138's steering-wheel angle gradient (N times the
+        steer gradient for a steering ratio N), when the steering-wheel angle was given.
     sideslip_gradient_rad_per_mps2, roll_gradient_rad_per_mps2 : float or None
     characteristic_speed_mps, critical_speed_mps : float or None
     ay_range_mps2 : tuple of float
@@ -64,6 +67,7 @@ class SteadyStateHandling:
     ay_range_mps2: tuple[float, float]
     curves: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     notes: list[str] = field(default_factory=list)
+    steering_wheel_gradient_rad_per_mps2: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (without the curves)."""
@@ -79,7 +83,9 @@ def steady_state_handling(ay_mps2: np.ndarray, delta_f_rad: np.ndarray, yaw_rate
                           speed_mps: np.ndarray, wheelbase_m: float,
                           sideslip_rad: np.ndarray | None = None,
                           roll_rad: np.ndarray | None = None,
-                          linear_range_mps2: float = LINEAR_RANGE_MPS2) -> SteadyStateHandling:
+                          linear_range_mps2: float = LINEAR_RANGE_MPS2,
+                          steering_wheel_rad: np.ndarray | None = None
+                          ) -> SteadyStateHandling:
     """Understeer gradient and the other ISO 4138 gradients from quasi-steady samples.
 
     Parameters
@@ -92,6 +98,8 @@ def steady_state_handling(ay_mps2: np.ndarray, delta_f_rad: np.ndarray, yaw_rate
     sideslip_rad, roll_rad : ndarray, optional
     linear_range_mps2 : float
         Samples with |a_y| above this are left out of the fits, m/s^2.
+    steering_wheel_rad : ndarray, optional
+        Steering-wheel angle δH, rad (for the steering-wheel angle gradient).
 
     Raises
     ------
@@ -136,5 +144,8 @@ def steady_state_handling(ay_mps2: np.ndarray, delta_f_rad: np.ndarray, yaw_rate
     v_crit = math.sqrt(-wheelbase_m / kus) if kus < 0 else None
     if kus == 0.0:
         notes.append("neutral steer: no characteristic or critical speed")
+    hand_g = None
+    if steering_wheel_rad is not None:
+        hand_g = _slope(ay_s, np.asarray(steering_wheel_rad, dtype=float)[sel])
     return SteadyStateHandling(kus, steer_grad, beta_g, roll_g, v_char, v_crit,
-                               (float(ay_s.min()), float(ay_s.max())), curves, notes)
+                               (float(ay_s.min()), float(ay_s.max())), curves, notes, hand_g)

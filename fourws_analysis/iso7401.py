@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from fourws_analysis import units
 from fourws_analysis.bag import MetricUnavailableError
 
 #: Fraction of the steady-state response that defines the response time (ISO 7401).
@@ -32,6 +33,9 @@ STEER_REFERENCE_FRACTION = 0.5
 STEADY_WINDOW_S = 1.0
 #: A step smaller than this fraction of the largest |steer| in the run is not a step.
 MIN_STEP_FRACTION = 0.5
+#: The straight-running baseline is taken before the steer leaves its initial value by this
+#: fraction of the step (noise on a recorded steer stays well below it).
+BASELINE_STEER_FRACTION = 0.01
 
 
 @dataclass
@@ -44,13 +48,17 @@ class StepMetrics:
     steady_state : float
         Steady-state response (channel unit).
     steady_state_gain : float
-        Steady-state response per steady-state steer (channel unit per rad).
+        Steady-state response per steady-state steer (channel unit per rad of the steer
+        given to :func:`step_metrics`, the front road-wheel angle δf).
     response_time_s, peak_response_time_s : float or None
         Times from t0 in s (None if never reached).
     overshoot : float or None
         (peak - steady) / steady, fraction.
     settled : bool
         Whether the response varies less than 2 % over the steady window.
+    steady_state_gain_steering_wheel : float or None
+        Steady-state response per steady-state steering-wheel angle δH (channel unit per
+        rad), when the steering-wheel angle was given.
     """
 
     channel: str
@@ -61,25 +69,49 @@ class StepMetrics:
     overshoot: float | None
     settled: bool
     notes: list[str] = field(default_factory=list)
+    steady_state_gain_steering_wheel: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready mapping."""
-        return dict(self.__dict__)
+        """JSON-ready mapping; keys name their units (:mod:`fourws_analysis.units`)."""
+        return {
+            units.steady_key(self.channel): self.steady_state,
+            units.gain_key(self.channel, units.ROAD_WHEEL.channel): self.steady_state_gain,
+            units.gain_key(self.channel, units.STEERING_WHEEL.channel):
+                self.steady_state_gain_steering_wheel,
+            "response_time_s": self.response_time_s,
+            "peak_response_time_s": self.peak_response_time_s,
+            "overshoot_fraction": self.overshoot, "settled": self.settled,
+            "notes": list(self.notes)}
 
 
 @dataclass
 class StepResult:
-    """All ISO 7401 step metrics of a run."""
+    """All ISO 7401 step metrics of a run.
+
+    Attributes
+    ----------
+    t0_s : float
+        Time reference (50 % of the steer step), s.
+    steer_step : float
+        Size of the steer step, rad (front road-wheel angle).
+    responses : dict of str to StepMetrics
+    tb_factor_s_deg : float or None
+    notes : list of str
+    hold_end_s : float
+        End of the hold (the steady window ends here), s.
+    """
 
     t0_s: float
     steer_step: float
     responses: dict[str, StepMetrics]
     tb_factor_s_deg: float | None
     notes: list[str] = field(default_factory=list)
+    hold_end_s: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping."""
-        return {"t0_s": self.t0_s, "steer_step": self.steer_step,
+        return {"t0_s": self.t0_s, "steer_step_rad": self.steer_step,
+                "hold_end_s": self.hold_end_s,
                 "tb_factor_s_deg": self.tb_factor_s_deg, "notes": list(self.notes),
                 **{k: v.to_dict() for k, v in self.responses.items()}}
 
@@ -118,7 +150,8 @@ def find_step(time_s: np.ndarray, steer: np.ndarray) -> tuple[int, int, float, f
 
 def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.ndarray],
                  sideslip_rad: np.ndarray | None = None,
-                 steady_window_s: float = STEADY_WINDOW_S) -> StepResult:
+                 steady_window_s: float = STEADY_WINDOW_S,
+                 steering_wheel_rad: np.ndarray | None = None) -> StepResult:
     """ISO 7401 metrics of a step-steer run.
 
     Parameters
@@ -133,6 +166,8 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
         Sideslip for the TB factor.
     steady_window_s : float
         Window at the end of the hold averaged for the steady state, s.
+    steering_wheel_rad : ndarray, optional
+        Steering-wheel angle δH, rad: the gains per δH are computed over the same window.
 
     Raises
     ------
@@ -147,8 +182,17 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
             f"step metrics: steer held {hold_s:.2f} s after the step; need "
             f">= {2 * steady_window_s:.1f} s to reach a steady state")
     win = (t >= t[end - 1] - steady_window_s) & (t <= t[end - 1])
-    base_idx = t < t0 - 1e-12
+    # the straight-running baseline ends where the steer starts to move, not at t0: a law
+    # with a quick a_y response (direct feedthrough of the steer) has moved a_y by then, and
+    # averaging the first half of the ramp into the baseline shifted its steady state by 1 %
+    steer_dev = np.abs(np.asarray(steer, dtype=float) - float(np.asarray(steer)[0]))
+    moving = np.nonzero(steer_dev > BASELINE_STEER_FRACTION * abs(step))[0]
+    base_idx = np.arange(t.size) < (moving[0] if moving.size else 0)
     steer_ss = float(np.mean(np.asarray(steer)[win])) - float(np.asarray(steer)[0])
+    hand_ss = None
+    if steering_wheel_rad is not None:
+        hand = np.asarray(steering_wheel_rad, dtype=float)
+        hand_ss = float(np.mean(hand[win])) - float(hand[0])
     out: dict[str, StepMetrics] = {}
     notes: list[str] = []
     for name, y in responses.items():
@@ -173,7 +217,8 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
             m_notes.append("no peak before the end of the hold (overdamped)")
         if not settled:
             m_notes.append("not settled over the steady window (varies by more than 2 %)")
-        out[name] = StepMetrics(name, yss, yss / steer_ss, rt, pt, over, settled, m_notes)
+        out[name] = StepMetrics(name, yss, yss / steer_ss, rt, pt, over, settled, m_notes,
+                                None if not hand_ss else yss / hand_ss)
     tb = None
     yaw = out.get("yaw_rate_radps")
     if sideslip_rad is not None and yaw is not None and yaw.peak_response_time_s is not None:
@@ -183,7 +228,7 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
         tb = yaw.peak_response_time_s * abs(math.degrees(beta_ss))
     elif sideslip_rad is not None:
         notes.append("TB factor needs a yaw-rate peak response time")
-    return StepResult(t0, step, out, tb, notes)
+    return StepResult(t0, step, out, tb, notes, float(t[end - 1]))
 
 
 def _first_crossing(t: np.ndarray, y: np.ndarray, level: float) -> float | None:

@@ -668,21 +668,32 @@ def plot_bode(data: BodeData | Sequence[tuple[str, BodeData]], path: str | Path,
     keys = list(keys) if keys is not None else list(series[0][1].magnitude)
     fig, axes = plt.subplots(2, len(keys), figsize=(4.2 * len(keys), 6.0), squeeze=False,
                              sharex=True)
+    from fourws_analysis.frequency import break_phase_jumps
+
     for k, key in enumerate(keys):
-        for label, bd in series:
+        for n, (label, bd) in enumerate(series):
             if key not in bd.magnitude:
                 raise ParameterError("keys", f"no response {key!r}; have {sorted(bd.magnitude)}")
-            axes[0, k].semilogx(bd.frequencies_hz, bd.magnitude_db(key), label=label or None)
-            axes[1, k].semilogx(bd.frequencies_hz, bd.phase_deg[key], label=label or None)
+            color = f"C{n % 10}"
+            axes[0, k].semilogx(bd.frequencies_hz, bd.magnitude_db(key), color=color,
+                                label=label or None)
+            # a zero response (e.g. sideslip under a zero-sideslip law) has no phase; and a
+            # jump (a zero on the jw axis) is left open rather than drawn as a vertical line
+            phase = np.where(bd.magnitude[key] > 1e-12, bd.phase_deg[key], np.nan)
+            axes[1, k].semilogx(*break_phase_jumps(bd.frequencies_hz, phase), color=color)
         axes[0, k].set_title(key)
         axes[0, k].set_ylabel(f"gain, dB re 1 {series[0][1].units[key]}")
         axes[1, k].set_ylabel("phase, deg")
         axes[1, k].set_xlabel("frequency, Hz")
         for ax in axes[:, k]:
             ax.grid(True, which="both", alpha=0.3)
-    if any(label for label, _ in series):
-        axes[0, 0].legend(fontsize=8)
     fig.tight_layout()
+    if any(label for label, _ in series):
+        # one legend under the panels, never over a curve
+        handles, labels = axes[0, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="lower center", ncol=min(6, len(labels)),
+                   fontsize=8, frameon=False)
+        fig.subplots_adjust(bottom=0.16)
     out = Path(path)
     fig.savefig(out, dpi=110)
     plt.close(fig)

@@ -135,6 +135,8 @@ class ControllerNode(Node):
         self._publish_config()
         self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
                                  self._on_sim_status, topics.STATUS_QOS)
+        self._recorder = reporting.RecorderWatch(self)
+        self._closing = False
         self.finished = False  # run_node: stop spinning
         # raw subscriptions + fourws_ros.cdr: the answer chain of lockstep runs stays short
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
@@ -239,12 +241,15 @@ class ControllerNode(Node):
             self.get_logger().info(f"simulation ended ({msg.end_reason}); stopping")
             self.finished = True
 
-    def on_shutdown(self, _executor: Any) -> None:
-        """Wait until every subscriber has what this node published."""
-        reporting.wait_delivered(self.counts, self.get_logger())
+    def on_shutdown(self, executor: Any) -> None:
+        """Answer no more states; wait until what this node published is delivered."""
+        self._closing = True
+        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder)
 
     # ------------------------------------------------------------------ handshake
     def _on_state(self, raw: bytes) -> None:
+        if self._closing:
+            return
         try:
             state = cdr.parse_state(raw)
         except cdr.CdrError as exc:

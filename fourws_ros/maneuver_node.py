@@ -99,6 +99,7 @@ class ManeuverNode(Node):
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                  self._on_state, topics.STREAM_QOS, raw=True)
         self._driver_encoder = cdr.DriverInputEncoder(topics.FRAME_BODY)
+        self._recorder = reporting.RecorderWatch(self)
         self._phase = ""
         self.done = False
         self.finished = False  # run_node: stop spinning
@@ -158,9 +159,10 @@ class ManeuverNode(Node):
             self._status(stamp, phase, self.maneuver.progress(t), event)
         self._phase = phase
 
-    def on_shutdown(self, _executor: Any) -> None:
-        """Wait until every subscriber has what this node published."""
-        reporting.wait_delivered(self.counts, self.get_logger())
+    def on_shutdown(self, executor: Any) -> None:
+        """Answer no more states; wait until what this node published is delivered."""
+        self.done = True
+        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -116,6 +116,7 @@ class ReplayNode(Node):
         else:
             self.clock_pub = None
         self.finished = False
+        self._recorder = reporting.RecorderWatch(self)
         self.published = 0
         self._index = 0
         if self.mode == "answer":
@@ -191,9 +192,9 @@ class ReplayNode(Node):
             self.finished = True
 
 
-    def on_shutdown(self, _executor: Any) -> None:
+    def on_shutdown(self, executor: Any) -> None:
         """Give reliable readers the time to take the last messages before the node goes."""
-        reporting.wait_delivered(self.counts, self.get_logger())
+        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder)
         self.get_logger().info(f"published {self.published} messages")
 
 

@@ -94,20 +94,62 @@ def publish_counted_status(pub: CountingPublisher, msg: Any, counts: PublishCoun
     pub.pub.publish(msg)
 
 
-def wait_delivered(counts: PublishCounts, logger: Any,
+class RecorderWatch:
+    """What the recorder reports stored (``/fourws/recorder_status``), for a node that must
+    know its messages are in the bag before it exits."""
+
+    def __init__(self, node: Any, subscribe: bool = True) -> None:
+        self.stored: dict[str, int] | None = None
+        if subscribe:
+            node.create_subscription(topics.message_class(topics.RECORDER_STATUS),
+                                     topics.RECORDER_STATUS, self.update, topics.STATUS_QOS)
+
+    def update(self, msg: Any) -> None:
+        """Take a ``RecorderStatus`` (the subscription calls it; a node that subscribes itself
+        passes the messages on)."""
+        self.stored = dict(zip(msg.topics, (int(n) for n in msg.stored)))
+
+    def holds(self, counts: Mapping[str, int]) -> bool:
+        """The recorder has stored at least ``counts`` of every topic it records that only
+        this node publishes."""
+        if self.stored is None:
+            return False
+        for topic, n in counts.items():
+            if topic in self.stored and len(topics.WRITER_ROLES[topic]) == 1 \
+                    and self.stored[topic] < n:
+                return False
+        return True
+
+
+def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
+                   watch: RecorderWatch | None = None,
                    timeout_s: float = DELIVERY_TIMEOUT_S) -> bool:
-    """Wait until every matched subscriber acknowledged every message published; False (and
-    an error logged, naming the topic) if one did not within ``timeout_s``."""
+    """Wait until what this node published is delivered: every matched subscriber has
+    acknowledged it, or the recorder reports it stored (a subscriber that died without
+    leaving the graph -- a killed launcher -- never acknowledges; the recorder's word is
+    what matters for the bag). False (and an error logged) after ``timeout_s``."""
+    import time
+
     from rclpy.duration import Duration
 
-    ok = True
-    for counted in counts.publishers:
-        if not counted.pub.wait_for_all_acked(Duration(seconds=timeout_s)):
-            logger.error(f"{counted.topic}: not every subscriber acknowledged the "
-                         f"{counts.counts[counted.topic]} messages within {timeout_s:.0f} s")
-            ok = False
-    return ok
+    deadline = time.monotonic() + timeout_s
+    now = Duration(seconds=0)
+    while True:
+        if all(c.pub.wait_for_all_acked(now) for c in counts.publishers):
+            return True
+        if watch is not None and watch.holds(counts.counts):
+            return True
+        if time.monotonic() > deadline:
+            late = [c.topic for c in counts.publishers if not c.pub.wait_for_all_acked(now)]
+            logger.error(f"not every subscriber acknowledged {', '.join(late)} within "
+                         f"{timeout_s:.0f} s")
+            return False
+        if executor is not None:
+            executor.spin_once(timeout_sec=0.05)
+        else:
+            time.sleep(0.05)
 
 
-__all__ = ["CountingPublisher", "DELIVERY_TIMEOUT_S", "PublishCounts", "fill_accounting",
+__all__ = ["CountingPublisher", "DELIVERY_TIMEOUT_S", "PublishCounts", "RecorderWatch",
+           "fill_accounting",
            "publish_counted_status", "publish_node_config", "wait_delivered"]

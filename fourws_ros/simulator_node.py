@@ -221,6 +221,7 @@ class SimulatorNode(Node):
         self.create_subscription(msg(topics.RECORDER_STATUS), topics.RECORDER_STATUS,
                                  self._on_recorder_status, topics.STATUS_QOS)
         self.window = FlowWindow(int(self._param("recorder_window")), _FLOW_TOPICS)
+        self._recorder = reporting.RecorderWatch(self, subscribe=False)
         # state, odometry, IMU and clock go out as CDR bytes written straight from the outputs
         # (fourws_ros.cdr), not through Python messages: a shorter lockstep tick, and less
         # time holding the GIL in the realtime thread
@@ -330,7 +331,8 @@ class SimulatorNode(Node):
         self._end(f"maneuver {msg.maneuver!r} {end}")
 
     def _on_recorder_status(self, msg: Any) -> None:
-        self.window.update(dict(zip(msg.topics, (int(n) for n in msg.stored))))
+        self._recorder.update(msg)
+        self.window.update(self._recorder.stored or {})
         self._recorder_seen = True
         held = self._held
         if held is not None and not self._holding_back():
@@ -591,7 +593,7 @@ class SimulatorNode(Node):
             self._rt_thread = None
             self._started = False
 
-    def on_shutdown(self, _executor: Any) -> None:
+    def on_shutdown(self, executor: Any) -> None:
         """Stop the realtime thread, publish the final status if the run did not end, log the
         timing, and wait until every subscriber has what was published."""
         self.paused = True
@@ -615,7 +617,7 @@ class SimulatorNode(Node):
         if not self.ended:
             self.ended = "stopped before the maneuver was done (signal)"
             self._publish_status(self.engine.tick.t, final=True)
-        reporting.wait_delivered(self.counts, self.get_logger())
+        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder)
 
 
 def _make_thread_realtime(priority: int, logger: Any) -> None:

@@ -185,14 +185,26 @@ class RunConfig:
     def from_scenario(cls, scenario: Any, law: str,
                       controller: ControllerSpec | None = None) -> "RunConfig":
         """The run of ``scenario`` (a :class:`fourws_run.scenario.Scenario`) with ``law``
-        (or ``controller``, the user's)."""
+        (or ``controller``, the user's). A step steer to a target lateral acceleration gets the
+        amplitude that reaches it with this law
+        (:func:`fourws_run.closed_loop.scenario_for_law`).
+
+        Raises
+        ------
+        ParameterError
+            The step target cannot be reached with the law.
+        """
+        from fourws_run.closed_loop import scenario_for_law
+
+        ctrl = controller if controller is not None else scenario.controller
+        if ctrl.builtin:
+            scenario = scenario_for_law(scenario, law)
         vehicle = scenario.build_vehicle()
         rec = scenario.recording
         recorded: tuple[str, ...] = ()
         if rec.enabled:
             recorded = (interface.RECORDED_TOPICS if rec.topics == "all"
                         else tuple(rec.topics))
-        ctrl = controller if controller is not None else scenario.controller
         return cls(vehicle=vehicle, belief=scenario.build_belief(vehicle),
                    maneuver=scenario.maneuver, law=law,
                    law_options=dict(scenario.law_options.get(law, {})),

@@ -99,11 +99,78 @@ class _RampAndHold:
 class StepSteerParams(_RampAndHold):
     """ISO 7401 step steer: 0 until ``start_s``, linear ramp over ``ramp_time_s`` to
     ``amplitude_rad``, then held. ISO 7401 asks for a 10-90 % rise within 0.15 s; the default
-    0.1 s ramp (0.08 s from 10 to 90 %) meets it."""
+    0.1 s ramp (0.08 s from 10 to 90 %) meets it.
 
-    amplitude_rad: float = _spec("any")
+    Equal steer or equal lateral acceleration: with ``amplitude_rad`` every law gets the same
+    steer, so the laws reach different lateral accelerations. ISO 7401 compares at one steady
+    lateral acceleration instead (4 m/s^2 is customary): set ``target_lateral_accel_mps2``
+    and the amplitude is found for each law before its run
+    (:func:`fourws_run.closed_loop.resolve_maneuver_for_law`, with the offline twin of the
+    run); ``amplitude_rad`` then only gives the direction (its sign) and the first guess, and
+    may be left out (a left turn). A resolved maneuver holds the amplitude found, the law it
+    was found for (``amplitude_law``) and the steady lateral acceleration the twin reached
+    with it (``amplitude_lateral_accel_mps2``, m/s^2): the run configuration of a bag says
+    which amplitude ran and why. An unresolved target cannot run (:class:`Maneuver` refuses
+    it), since the amplitude depends on the law.
+    """
+
+    amplitude_rad: float | None = None
     start_s: float = _spec("nonnegative", default=0.5)
     ramp_time_s: float = _spec("nonnegative", default=0.1)
+    target_lateral_accel_mps2: float | None = None
+    amplitude_law: str = ""
+    amplitude_lateral_accel_mps2: float | None = None
+
+    def _check(self, source: str | None, prefix: str) -> None:
+        for name in ("amplitude_rad", "target_lateral_accel_mps2",
+                     "amplitude_lateral_accel_mps2"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value):
+                raise ParameterError(f"{prefix}{name}",
+                                     f"must be a finite number, got {value!r}", source)
+            object.__setattr__(self, name, float(value))
+        if not isinstance(self.amplitude_law, str):
+            raise ParameterError(f"{prefix}amplitude_law",
+                                 f"must be a law name, got {self.amplitude_law!r}", source)
+        target = self.target_lateral_accel_mps2
+        if target is None:
+            if self.amplitude_rad is None:
+                raise ParameterError(f"{prefix}amplitude_rad", "missing required field (or "
+                                     "set target_lateral_accel_mps2)", source)
+            for name in ("amplitude_law", "amplitude_lateral_accel_mps2"):
+                if getattr(self, name) not in ("", None):
+                    raise ParameterError(f"{prefix}{name}",
+                                         "only with target_lateral_accel_mps2", source)
+            return
+        if target <= 0.0:
+            raise ParameterError(f"{prefix}target_lateral_accel_mps2",
+                                 f"must be > 0 (the steady |a_y|), got {target!r}", source)
+        if self.amplitude_rad == 0.0:
+            raise ParameterError(f"{prefix}amplitude_rad", "must be nonzero with "
+                                 "target_lateral_accel_mps2 (its sign is the direction)",
+                                 source)
+        if self.amplitude_law and self.amplitude_rad is None:
+            raise ParameterError(f"{prefix}amplitude_rad",
+                                 "missing: a resolved target records its amplitude", source)
+
+    @property
+    def resolved(self) -> bool:
+        """True when the amplitude is known (given, or found for ``amplitude_law``)."""
+        return self.target_lateral_accel_mps2 is None or bool(self.amplitude_law)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a mapping; the target fields only when a target is set."""
+        out = dataclasses.asdict(self)
+        if self.target_lateral_accel_mps2 is None:
+            for name in ("target_lateral_accel_mps2", "amplitude_law",
+                         "amplitude_lateral_accel_mps2"):
+                del out[name]
+        if out["amplitude_rad"] is None:
+            del out["amplitude_rad"]
+        return out
 
 
 @dataclass(frozen=True)
@@ -458,7 +525,8 @@ class ManeuverSpec:
             out["path_driver"] = dataclasses.asdict(self.path_driver)
         if self.tracking_driver is not None:
             out["tracking_driver"] = dataclasses.asdict(self.tracking_driver)
-        out.update(dataclasses.asdict(self.params))
+        to_dict = getattr(self.params, "to_dict", None)
+        out.update(to_dict() if to_dict is not None else dataclasses.asdict(self.params))
         return out
 
 
@@ -573,6 +641,12 @@ class Maneuver:
         self._hold_after_brake_mps: float | None = None
         self._aborted = ""
         self._end_condition = False
+        if not getattr(p, "resolved", True):
+            raise ParameterError(
+                "target_lateral_accel_mps2", "the step amplitude for this target is found per "
+                "law before a run (fourws run and run_scenario do it, see "
+                "fourws_run.closed_loop.resolve_maneuver_for_law); this maneuver was not "
+                "resolved", spec.source or spec.name)
         if spec.type == "constant_radius":
             direction = 1 if p.direction == "left" else -1
             assert spec.path_driver is not None

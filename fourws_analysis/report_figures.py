@@ -1,0 +1,399 @@
+"""The report's figures (matplotlib, Agg): ``figure_*`` build a figure from
+:class:`~fourws_analysis.compare.RunAnalysis` results (tests inspect what is drawn),
+``plot_*`` save it as PNG. One colour per run in every figure; legends sit outside the
+plotting areas; phase curves are never joined across a jump.
+"""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from fourws_analysis import units
+from fourws_analysis.compare import RunAnalysis
+from fourws_analysis.frequency import COHERENCE_MIN, break_phase_jumps, display_phase_deg
+from fourws_analysis.report_texts import (MODEL_NAMES, common_ratio, law_groups, run_label,
+                                          stability_notes)
+
+#: Time-history panels: channel, label, scale to display unit, unit.
+HISTORY_PANELS = (
+    ("yaw_rate_radps", "yaw rate r", math.degrees(1.0), "deg/s"),
+    ("lateral_accel_mps2", "lateral acceleration a_y", 1.0, "m/s²"),
+    ("sideslip_rad", "sideslip β", math.degrees(1.0), "deg"),
+    ("roll_rad", "roll φ", math.degrees(1.0), "deg"),
+    ("front_wheel_angle_rad", "front road-wheel angle δf", math.degrees(1.0), "deg"),
+    ("rear_wheel_angle_rad", "rear road-wheel angle δr (applied)", math.degrees(1.0), "deg"),
+)
+#: Model gains are drawn no lower than this below the lowest trusted measured gain, dB.
+GAIN_FLOOR_BELOW_DB = 20.0
+#: Eigenvalues with real part below minus this (wheel spin, tire lag, actuator) are not drawn.
+EIG_PLOT_MIN_REAL = 40.0
+#: Line style and eigenvalue marker of each model overlay.
+_MODEL_STYLES = {"2dof": "--", "3dof": ":", "8dof-lin": "-."}
+_EIG_MARKERS = {"2dof": "s", "3dof": "D", "8dof-lin": "^"}
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update({"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3,
+                         "axes.spines.top": False, "axes.spines.right": False,
+                         "font.size": 9, "legend.fontsize": 8, "legend.framealpha": 0.8})
+    return plt
+
+
+def _colors(runs: Sequence[RunAnalysis]) -> dict[str, str]:
+    """One colour per run, the same in every figure."""
+    return {r.name: f"C{k % 10}" for k, r in enumerate(runs)}
+
+
+def _save(fig: Any, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _masked(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    out = np.array(values, dtype=float)
+    out[mask] = np.nan
+    return out
+
+
+def figure_time_histories(runs: Sequence[RunAnalysis]) -> Any:
+    """Overlaid time histories (yaw rate, a_y, sideslip, roll, front and rear angles)."""
+    plt = _plt()
+    colors = _colors(runs)
+    fig, axes = plt.subplots(3, 2, figsize=(11, 8.4), sharex=True, layout="constrained")
+    for ax, (chan, label, scale, unit) in zip(axes.flat, HISTORY_PANELS):
+        for r in runs:
+            y = r.run.channels.get(chan)
+            if y is None:
+                continue
+            t = r.run.time_s - r.run.time_s[0]
+            ax.plot(t, y * scale, lw=1.3, color=colors[r.name], label=run_label(r))
+            cmd = r.run.channels.get("front_wheel_angle_cmd_rad")
+            if chan == "front_wheel_angle_rad" and cmd is not None:
+                ax.plot(t, cmd * scale, lw=1.0, ls="--", color=colors[r.name])
+        ax.set_title(label, loc="left", fontweight="bold")
+        ax.set_ylabel(unit)
+    for ax in axes[-1]:
+        ax.set_xlabel("time (s)")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    if any("front_wheel_angle_cmd_rad" in r.run.channels for r in runs):
+        from matplotlib.lines import Line2D
+
+        handles += [Line2D([], [], color="k", lw=1.3), Line2D([], [], color="k", ls="--")]
+        labels += ["δf applied (roll steer included)", "δf commanded by the driver"]
+    fig.legend(handles, labels, loc="outside upper center",
+               ncol=min(6, max(1, len(labels))), frameon=False)
+    return fig
+
+
+def plot_time_histories(runs: Sequence[RunAnalysis], path: Path) -> Path:
+    """Save :func:`figure_time_histories` to ``path``."""
+    return _save(figure_time_histories(runs), path)
+
+
+def _limits(values: list[np.ndarray], pad_fraction: float, min_pad: float
+            ) -> tuple[float, float] | None:
+    finite = [v[np.isfinite(v)] for v in values if np.size(v)]
+    finite = [v for v in finite if v.size]
+    if not finite:
+        return None
+    lo = min(float(v.min()) for v in finite)
+    hi = max(float(v.max()) for v in finite)
+    pad = max(min_pad, pad_fraction * (hi - lo))
+    return lo - pad, hi + pad
+
+
+def _frequency_ticks(ax: Any) -> None:
+    """Plain-number frequency ticks at 1, 2, 5 per decade (no crowded minor labels when the
+    band spans little more than a decade)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+def figure_bode(runs: Sequence[RunAnalysis]) -> Any | None:
+    """Gain, phase and coherence per output, per front road-wheel angle δf; measured (solid,
+    faded where not trusted) over the model responses (one line style per model).
+
+    Phases are drawn as :func:`~fourws_analysis.frequency.display_phase_deg` gives them and
+    never joined across a jump (:func:`~fourws_analysis.frequency.break_phase_jumps`); a
+    model's phase is left out where its gain is below the drawn floor (a zero gain has no
+    phase). The axis limits follow the trusted points and the models, so the faded points
+    (an input zero can put them 300 dB up) do not squash the curves. The right gain axis
+    reads the same curves per steering-wheel angle δH when the runs share one steering
+    ratio.
+    """
+    road = units.ROAD_WHEEL.channel
+    outputs = [o for o in units.OUTPUTS.values()
+               if any(f"{o.channel}/{road}" in r.frequency for r in runs)]
+    if not outputs:
+        return None
+    from matplotlib.lines import Line2D
+
+    plt = _plt()
+    colors = _colors(runs)
+    fig, axes = plt.subplots(3, len(outputs), figsize=(4.4 * len(outputs), 9.2), sharex=True,
+                             gridspec_kw={"height_ratios": [3, 3, 1.3]}, squeeze=False,
+                             layout="constrained")
+    fr_runs = [r for r in runs if any(f"{o.channel}/{road}" in r.frequency for o in outputs)]
+    ratio = common_ratio(fr_runs)
+    used_models: set[str] = set()
+    for col, out in enumerate(outputs):
+        ax_g, ax_p, ax_c = axes[:, col]
+        key = f"{out.channel}/{road}"
+        members = [r for r in runs if key in r.frequency]
+        trusted_db = [r.frequency[key].gain_db[r.frequency[key].trusted()
+                                               & (r.frequency[key].freq_hz > 0.0)]
+                      for r in members]
+        floor_db = min((float(np.nanmin(g)) for g in trusted_db if g.size),
+                       default=-100.0) - GAIN_FLOOR_BELOW_DB
+        gains: list[np.ndarray] = list(trusted_db)
+        phases: list[np.ndarray] = []
+        for r in members:
+            fr = r.frequency[key]
+            color = colors[r.name]
+            pos = fr.freq_hz > 0.0  # the 0 Hz point of a transient estimate is off the axis
+            ok = fr.trusted() & pos
+            phase = display_phase_deg(fr)
+            phases.append(phase[ok])
+            for mask, lw, alpha in ((ok, 1.8, 1.0), (~ok & pos, 0.8, 0.3)):
+                ax_g.semilogx(fr.freq_hz, _masked(fr.gain_db, ~mask), color=color, lw=lw,
+                              alpha=alpha)
+                ax_p.semilogx(*break_phase_jumps(fr.freq_hz, _masked(phase, ~mask)),
+                              color=color, lw=lw, alpha=alpha)
+            if fr.coherence is not None:
+                ax_c.semilogx(fr.freq_hz, _masked(fr.coherence, ~pos), color=color, lw=1.2)
+            for name, system in r.models.items():
+                if out.channel not in system.C:
+                    continue
+                f_pos = fr.freq_hz[pos]
+                f = np.geomspace(max(float(f_pos[0]), 0.02), float(f_pos[-1]), 300)
+                model = system.response(out.channel, f)
+                style = _MODEL_STYLES.get(name, "--")
+                used_models.add(name)
+                # a model whose gain is zero (e.g. sideslip under a zero-sideslip law) would
+                # squash the axis to -300 dB: it is drawn at the floor, without a phase
+                gain = np.maximum(model.gain_db, floor_db)
+                ax_g.semilogx(f, gain, style, color=color, lw=1.2)
+                ph = _masked(model.phase_deg, model.gain_db < floor_db)
+                ax_p.semilogx(*break_phase_jumps(f, ph), style, color=color, lw=1.2)
+                gains.append(gain)
+                phases.append(ph)
+        for ax, vals, pad, min_pad in ((ax_g, gains, 0.06, 3.0), (ax_p, phases, 0.06, 10.0)):
+            lims = _limits(vals, pad, min_pad)
+            if lims is not None:
+                ax.set_ylim(*lims)
+        ax_g.set_title(f"{out.label} {out.symbol} / δf", loc="left", fontweight="bold")
+        ax_g.set_ylabel(f"gain, dB re 1 {out.gain_unit} of δf")
+        if ratio is not None:
+            off = 20.0 * math.log10(ratio)
+            sec = ax_g.secondary_yaxis("right", functions=(lambda d, o=off: d - o,
+                                                           lambda d, o=off: d + o))
+            sec.set_ylabel(f"dB re 1 {out.gain_unit} of δH", fontsize=8)
+        ax_p.set_ylabel("phase (deg)")
+        ax_c.set_ylabel("coherence")
+        ax_c.axhline(COHERENCE_MIN, color="0.5", lw=0.8, ls=":")
+        ax_c.set_ylim(0, 1.05)
+        ax_c.set_xlabel("frequency (Hz)")
+        _frequency_ticks(ax_c)
+    handles = [Line2D([], [], color=colors[r.name], lw=2.0) for r in fr_runs]
+    labels = [run_label(r) for r in fr_runs]
+    handles.append(Line2D([], [], color="k", lw=1.8))
+    labels.append(f"measured (faded: coherence < {COHERENCE_MIN} or input not excited)")
+    for name in ("2dof", "3dof", "8dof-lin"):
+        if name in used_models:
+            handles.append(Line2D([], [], color="k", lw=1.2, ls=_MODEL_STYLES[name]))
+            labels.append(MODEL_NAMES[name])
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(4, len(labels)),
+               frameon=False)
+    per_hand = (f"; right axes: per steering-wheel angle δH = {ratio:g} δf "
+                f"({20 * math.log10(ratio):.1f} dB lower)" if ratio is not None else "")
+    fig.suptitle("Frequency response per commanded front road-wheel angle δf (left axes)"
+                 + per_hand, fontsize=10)
+    return fig
+
+
+def plot_bode(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
+    """Save :func:`figure_bode` to ``path`` (None when no run has a frequency response)."""
+    fig = figure_bode(runs)
+    return None if fig is None else _save(fig, path)
+
+
+def figure_step(runs: Sequence[RunAnalysis]) -> Any | None:
+    """Step responses normalized by their steady state, with ISO 7401 markers."""
+    steps = [r for r in runs if r.step is not None]
+    if not steps:
+        return None
+    plt = _plt()
+    colors = _colors(runs)
+    chans = (("yaw_rate_radps", "yaw rate r"), ("lateral_accel_mps2", "lateral acceleration a_y"))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True, layout="constrained")
+    for ax, (chan, title) in zip(axes, chans):
+        for r in steps:
+            m = r.step.responses.get(chan)
+            if m is None or m.steady_state == 0.0:
+                continue
+            color = colors[r.name]
+            t = r.run.time_s - r.step.t0_s
+            y = r.run.channels[chan]
+            y0 = float(np.mean(y[t < 0])) if np.any(t < 0) else float(y[0])
+            sel = (t > -0.5) & (t < 4.0)
+            ax.plot(t[sel], (y[sel] - y0) / m.steady_state, color=color, lw=1.5,
+                    label=run_label(r))
+            if m.response_time_s is not None:
+                ax.plot(m.response_time_s, 0.9, "o", color=color, ms=5)
+            if m.peak_response_time_s is not None and m.overshoot is not None:
+                ax.plot(m.peak_response_time_s, 1 + m.overshoot, "v", color=color, ms=6)
+        ax.axhline(1.0, color="0.5", lw=0.8)
+        ax.axhline(0.9, color="0.5", lw=0.6, ls=":")
+        ax.axvline(0.0, color="0.5", lw=0.6, ls=":")
+        ax.set_title(title, loc="left", fontweight="bold")
+        ax.set_xlabel("time from 50 % steer (s)")
+    axes[0].set_ylabel("response / steady state")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(6, max(1, len(labels))),
+               frameon=False)
+    fig.suptitle("ISO 7401 step response, normalized by the steady state "
+                 "(○ 90 % response time, ▽ peak)", fontsize=10)
+    return fig
+
+
+def plot_step(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
+    """Save :func:`figure_step` to ``path`` (None when no run is a step)."""
+    fig = figure_step(runs)
+    return None if fig is None else _save(fig, path)
+
+
+def figure_steady_state(runs: Sequence[RunAnalysis]) -> Any | None:
+    """ISO 4138 curves: steer, sideslip and roll vs lateral acceleration with the fits; the
+    fitted gradients in a legend under each panel."""
+    steady = [r for r in runs if r.steady is not None]
+    if not steady:
+        return None
+    plt = _plt()
+    colors = _colors(runs)
+    panels = (("steer_rad", "front road-wheel angle δf (commanded)",
+               "steer_gradient_rad_per_mps2"),
+              ("sideslip_rad", "sideslip β", "sideslip_gradient_rad_per_mps2"),
+              ("roll_rad", "roll φ", "roll_gradient_rad_per_mps2"))
+    fig, axes = plt.subplots(1, 3, figsize=(12, 4.8), layout="constrained")
+    for ax, (key, title, grad) in zip(axes, panels):
+        for r in steady:
+            c = r.steady.curves
+            if key not in c:
+                continue
+            color = colors[r.name]
+            ax.plot(c["ay_mps2"], np.degrees(c[key]), ".", ms=2, color=color, alpha=0.5)
+            g = getattr(r.steady, grad)
+            if g is not None:
+                ay = np.linspace(min(c["ay_mps2"]), max(c["ay_mps2"]), 2)
+                fit = np.polyfit(c["ay_mps2"], c[key], 1)
+                ax.plot(ay, np.degrees(np.polyval(fit, ay)), color=color, lw=1.5,
+                        label=f"{run_label(r)}: {math.degrees(g):.3f} deg/(m/s²)")
+        ax.set_title(title, loc="left", fontweight="bold")
+        ax.set_xlabel("lateral acceleration (m/s²)")
+        ax.set_ylabel("deg")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), frameon=False)
+    return fig
+
+
+def plot_steady_state(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
+    """Save :func:`figure_steady_state` to ``path`` (None without a steady-state run)."""
+    fig = figure_steady_state(runs)
+    return None if fig is None else _save(fig, path)
+
+
+
+def figure_eigenvalues(runs: Sequence[RunAnalysis]) -> Any | None:
+    """Eigenvalues, one panel per law: the 8-DOF linearized vs speed (coloured by speed),
+    the linear models at the run speed and the eigenvalues identified from each run. The
+    right half-plane is shaded; each panel's title says whether a mode lies there
+    (:func:`stability_notes`); one legend under the panels."""
+    groups = law_groups(runs)
+    if not groups:
+        return None
+    from matplotlib.lines import Line2D
+
+    plt = _plt()
+    colors = _colors(runs)
+    n = len(groups)
+    fig, axes = plt.subplots(1, n, figsize=(5.6 * n + 1.2, 5.6), squeeze=False,
+                             layout="constrained")
+    sc = None
+    handles: dict[str, Any] = {}
+    for ax, (law, members) in zip(axes[0], groups.items()):
+        first = members[0]
+        reals: list[float] = [0.0]
+        if first.eig_sweep is not None:
+            ev = first.eig_sweep.eigenvalues
+            speeds = np.repeat(first.eig_sweep.speed_mps[:, None], ev.shape[1], axis=1)
+            ok = np.isfinite(ev) & (ev.real > -EIG_PLOT_MIN_REAL)
+            sc = ax.scatter(ev.real[ok], ev.imag[ok], c=speeds[ok], cmap="viridis", s=14,
+                            vmin=min(first.eig_sweep.speed_mps),
+                            vmax=max(first.eig_sweep.speed_mps))
+            reals.extend(ev.real[ok].tolist())
+            handles["8-DOF linearized vs speed (colour: speed)"] = Line2D(
+                [], [], ls="", marker="o", ms=5, color="tab:green")
+        for name, m in first.models.items():
+            e = m.eigenvalues
+            e = e[(np.abs(e) > 1e-6) & (e.real > -EIG_PLOT_MIN_REAL)]
+            marker = _EIG_MARKERS.get(name, "o")
+            ax.plot(e.real, e.imag, marker, mfc="none", mec="k", ms=9)
+            reals.extend(e.real.tolist())
+            handles[f"{MODEL_NAMES.get(name, name)} at the run speed"] = Line2D(
+                [], [], ls="", marker=marker, mfc="none", mec="k", ms=8)
+        for r in members:
+            if r.modes is not None:
+                e = r.modes.eigenvalues
+                e = e[e.real > -EIG_PLOT_MIN_REAL]
+                ax.plot(e.real, e.imag, "X", mfc=colors[r.name], mec="k", mew=0.8, ms=12)
+                reals.extend(e.real.tolist())
+                handles[f"identified from {run_label(r)}"] = Line2D(
+                    [], [], ls="", marker="X", mfc=colors[r.name], mec="k", mew=0.8, ms=10)
+        hi = max(reals)
+        right = max(2.0, 1.15 * hi) if hi > 0 else 2.0
+        ax.set_xlim(-EIG_PLOT_MIN_REAL - 1.0, right)
+        ax.axvspan(0.0, right, color="tab:red", alpha=0.07, lw=0)
+        ax.axvline(0.0, color="k", lw=0.8)
+        ax.set_xlabel("real part (1/s)")
+        headline = stability_notes(members)[0]
+        # wrapped to the panel's width (~70 characters at 9 pt over 5.6 in)
+        ax.set_title(f"law {law}\n" + textwrap.fill(headline, 66), loc="left", fontsize=9,
+                     fontweight="bold",
+                     color="tab:red" if headline.startswith("Unstable") else "k")
+    axes[0][0].set_ylabel("imaginary part (rad/s)")
+    if sc is not None:
+        fig.colorbar(sc, ax=list(axes[0]), label="speed (m/s)", fraction=0.03)
+    fig.legend(list(handles.values()), list(handles), loc="outside lower center",
+               ncol=min(4, max(1, len(handles))), frameon=False)
+    fig.suptitle("Eigenvalues of the lateral, yaw and roll modes (shaded: right of the "
+                 f"imaginary axis, unstable; faster than -{EIG_PLOT_MIN_REAL:g} 1/s left out)",
+                 fontsize=10)
+    return fig
+
+
+def plot_eigenvalues(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
+    """Save :func:`figure_eigenvalues` to ``path`` (None when nothing has eigenvalues)."""
+    fig = figure_eigenvalues(runs)
+    return None if fig is None else _save(fig, path)
+
+
+__all__ = ["EIG_PLOT_MIN_REAL", "GAIN_FLOOR_BELOW_DB", "HISTORY_PANELS", "figure_bode",
+           "figure_eigenvalues", "figure_step", "figure_steady_state", "figure_time_histories",
+           "plot_bode", "plot_eigenvalues", "plot_step", "plot_steady_state",
+           "plot_time_histories"]
