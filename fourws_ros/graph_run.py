@@ -121,8 +121,9 @@ class _LauncherNode:
         from std_msgs.msg import String
         from std_srvs.srv import SetBool
 
-        os.environ.update({"ROS_DOMAIN_ID": str(domain_id),
-                           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
+        # the domain goes to rclpy.init; the process environment keeps the user's
+        # ROS_DOMAIN_ID (a later run in this process must see what the user set, not ours)
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
         self.context = Context()
         rclpy.init(args=[], context=self.context, domain_id=domain_id,
                    signal_handler_options=SignalHandlerOptions.NO)
@@ -416,8 +417,10 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: _LauncherNode, state: _R
         now = time.monotonic()
         if now - state.last_advance > STALL_TIMEOUT_S:
             waiting = state.sim.waiting_for if state.sim is not None else ""
+            stopped = [c.name for c in group.children if c.stopped()]
             return (f"simulation stalled at t = {state.sim_time_s:.2f} s (no progress for "
                     f"{STALL_TIMEOUT_S:.0f} s)"
+                    + (f"; node {', '.join(stopped)} is stopped (SIGSTOP)" if stopped else "")
                     + (f"; the simulator waits for: {waiting}" if waiting else ""))
         if not config.lockstep and state.sim_time_s > (config.maneuver.duration_s
                                                         + REALTIME_OVERRUN_S):
@@ -465,7 +468,10 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: _LauncherNode | None,
             if left:
                 echo(f"  {', '.join(left)} did not exit after the run; stopping")
                 group.stop(left)
-            if bag_path is not None and group.has(rec):
+            # the recorder can only close a complete bag once the maneuver's final counts
+            # are in; without them (a stopped or dead maneuver node) it is stopped below and
+            # closes the bag with what it has
+            if bag_path is not None and group.has(rec) and state.maneuver_end is not None:
                 left = group.wait_exit([rec], RECORDER_GRACE_S, poll)
                 if left:
                     detail = (state.recorder.detail if state.recorder is not None
@@ -531,17 +537,18 @@ def _conclude(record: RunRecord, config: RunConfig, state: _RunState, interrupt:
     if failure:
         record.outcome = Outcome.FAILED
         return
-    if problems:
-        record.outcome = Outcome.FAILED
-        record.reason = "recording incomplete: " + "; ".join(problems)
-        return
     assert state.sim_final is not None
     end = str(state.sim_final.end_reason)
     ambiguous = {k: n for k, n in record.rejections.items() if "second answer" in k}
-    if state.sim_final.stop_reason:
-        stop = str(state.sim_final.stop_reason)
-        record.outcome = Outcome.DIVERGED if "diverged" in stop else Outcome.FAILED
-        record.reason = stop
+    stop = str(state.sim_final.stop_reason)
+    if stop:
+        diverged = "diverged" in stop and not problems
+        record.outcome = Outcome.DIVERGED if diverged else Outcome.FAILED
+        record.reason = stop + ("" if not problems else
+                                "; recording incomplete: " + "; ".join(problems))
+    elif problems:
+        record.outcome = Outcome.FAILED
+        record.reason = "recording incomplete: " + "; ".join(problems)
     elif ambiguous:
         record.outcome = Outcome.FAILED
         record.reason = ("a second publisher answered states of this run ("

@@ -7,7 +7,8 @@ outputs and publishes the ``DriverInput`` stamped with the state's stamp -- the 
 simulator waits for in lockstep mode. It publishes ``ManeuverStatus`` (phase, progress,
 events, its published counts) and, once the maneuver is done, a final status with
 ``done = true`` stamped with that state's stamp (``end``: ``completed``, ``end_condition`` or
-``aborted``) instead of an answer, which ends the run. Then it waits until every subscriber
+``aborted``) instead of an answer, which ends the run; if the simulation ends first (it
+diverged), the final status says ``stopped``. Then it waits until every subscriber
 has everything it published and exits (``exit_when_done``).
 
 Parameters (ROS)
@@ -100,6 +101,8 @@ class ManeuverNode(Node):
                                  self._on_state, topics.STREAM_QOS, raw=True)
         self._driver_encoder = cdr.DriverInputEncoder(topics.FRAME_BODY)
         self._recorder = reporting.RecorderWatch(self)
+        self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
+                                 self._on_sim_status, topics.STATUS_QOS)
         self._phase = ""
         self.done = False
         self.finished = False  # run_node: stop spinning
@@ -158,6 +161,14 @@ class ManeuverNode(Node):
         if event or outputs["step"] % STATUS_EVERY_STEPS == 0:
             self._status(stamp, phase, self.maneuver.progress(t), event)
         self._phase = phase
+
+    def _on_sim_status(self, msg: Any) -> None:
+        """The simulation ended before the maneuver did (it diverged, or stopped for a node
+        that stopped answering): report the final counts with ``end`` ``stopped``."""
+        if msg.final and not self.done:
+            t = float(msg.sim_time_s)
+            self._finish(conversions.time_to_ns(t), t, "stopped",
+                         f"stopped: the simulation ended first ({msg.end_reason})")
 
     def on_shutdown(self, executor: Any) -> None:
         """Answer no more states; wait until what this node published is delivered."""

@@ -97,6 +97,16 @@ class Child:
         """True while the process runs."""
         return self.proc is not None and self.proc.poll() is None
 
+    def stopped(self) -> bool:
+        """The process is stopped (SIGSTOP/SIGTSTP): alive but not running."""
+        if not self.alive() or self.proc is None:
+            return False
+        try:
+            stat = Path(f"/proc/{self.proc.pid}/stat").read_text()
+        except OSError:
+            return False
+        return stat.rsplit(")", 1)[-1].split()[0] in ("T", "t")
+
     def exit_code(self) -> int | None:
         """The exit code (None while it runs)."""
         return None if self.proc is None else self.proc.poll()
@@ -205,8 +215,9 @@ class ProcessGroup:
         deadline = time.monotonic() + timeout_s
         while True:
             running = [n for n in names if self.child(n).alive()]
-            if not running or time.monotonic() > deadline:
-                return running
+            if not running or time.monotonic() > deadline \
+                    or all(self.child(n).stopped() for n in running):
+                return running  # (a stopped process cannot exit by itself)
             poll(0.05)
 
     def stop(self, names: Iterable[str] | None = None,

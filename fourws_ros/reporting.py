@@ -14,6 +14,7 @@ import json
 from typing import Any, Mapping
 
 from fourws_ros import topics
+from fourws_run.interface import WRITER_ROLES
 from fourws_run.ticks import Rejections
 
 #: How long a stopping node waits for its subscribers to acknowledge everything, s.
@@ -115,7 +116,7 @@ class RecorderWatch:
         if self.stored is None:
             return False
         for topic, n in counts.items():
-            if topic in self.stored and len(topics.WRITER_ROLES[topic]) == 1 \
+            if topic in self.stored and len(WRITER_ROLES[topic]) == 1 \
                     and self.stored[topic] < n:
                 return False
         return True

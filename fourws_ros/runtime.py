@@ -129,6 +129,10 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
         executor.remove_node(node)
         executor.shutdown(timeout_sec=1.0)
     finally:
+        # the node's work is done: a signal arriving while the process exits (the launcher
+        # stopping a node that is already ending) must not turn a clean exit into a kill
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
         if node is not None:
             node.destroy_node()
         if rclpy.ok():

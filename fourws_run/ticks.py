@@ -315,8 +315,9 @@ class LockstepAnswers:
             self.driver_inputs_accepted += 1
             return True
         if stamp_ns in self._past:
-            return self.rejections.add(topic, "answer to a state already run",
-                                       f"stamp {stamp_ns} ns")
+            # the tick ran on one answer already: whichever came first, one publisher too many
+            return self.rejections.add(topic, "second answer to one state",
+                                       f"stamp {stamp_ns} ns, after the tick ran")
         return self.rejections.add(topic, "stamp of no published state",
                                    f"stamp {stamp_ns} ns")
 
@@ -345,8 +346,8 @@ class LockstepAnswers:
                 self.late_commands += 1
                 self._past[stamp_ns] = (step, True)
                 return False
-            return self.rejections.add(topic, "answer to a state already run",
-                                       f"step {step}")
+            return self.rejections.add(topic, "second answer to one state",
+                                       f"step {step}, after the tick ran")
         return self.rejections.add(topic, "step of no published state", f"step {step}")
 
     @property

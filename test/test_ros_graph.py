@@ -143,11 +143,17 @@ def test_controller_crash_stops_run_and_keeps_bag(tmp_path):
                     on_running=kill_controller)
     assert not run.ok
     assert "fourws_controller" in run.reason and "SIGKILL" in run.reason
-    # every other process is gone (no orphans) and the recorder closed a readable bag that
-    # says it is incomplete (the run was cut short)
+    # every other process is gone (no orphans) and the recorder closed a bag holding every
+    # message the surviving nodes published up to the crash (their final counts say so); a
+    # command the killed controller had in flight may have reached the simulator but not the
+    # recorder, and then the bag says so
     assert all(code is not None for code in run.exit_codes.values())
-    assert run.exit_codes["fourws_recorder"] == 4
-    assert run.account is not None and not run.account.complete
+    assert run.account is not None
+    if run.account.complete:
+        assert run.exit_codes["fourws_recorder"] == 0
+    else:
+        assert run.exit_codes["fourws_recorder"] == 4
+        assert all(topics.REAR_STEER_CMD in p for p in run.account.problems())
     bag = load_bag(run.bag_path, allow_incomplete=True)
     assert len(bag.topics[topics.STATE]) >= 1
     assert all(np.isfinite(bag.topics[topics.STATE].fields["yaw_rate_radps"]))

@@ -1,0 +1,85 @@
+"""A rogue ROS node for the fault tests: publishes what no node of a fourws run sends.
+
+Run as ``python rogue_node.py KIND SECONDS`` on the run's ROS domain; ``KIND``:
+
+* ``garbage`` -- states with a simulation time of 1e6 s, NaN and far-future states, commands
+  with future stamps and impossible angles, a 100 rad driver input, a ``done`` maneuver
+  status for no state of the run, a flood of each, for ``SECONDS``;
+* ``mimic`` -- answers every state of the run with a plausible driver input and rear-steer
+  command (a second publisher where one is expected).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+
+from fourws_ros import conversions, topics
+from fourws_sim.drivers import DriverCommand
+
+
+def main(kind: str, seconds: float) -> int:
+    rclpy.init()
+    node = rclpy.create_node("rogue")
+    msg = topics.message_class
+    pubs = {t: node.create_publisher(msg(t), t, topics.TOPIC_QOS[t])
+            for t in (topics.STATE, topics.DRIVER_INPUT, topics.REAR_STEER_CMD,
+                      topics.MANEUVER_STATUS, topics.SIM_STATUS)}
+    sent = 0
+    print("rogue ready", flush=True)
+    end = time.monotonic() + seconds
+    if kind == "mimic":
+        def answer(state) -> None:
+            nonlocal sent
+            pubs[topics.DRIVER_INPUT].publish(
+                conversions.driver_msg(DriverCommand(0.5, 0.03), state.sim_time_s))
+            cmd = msg(topics.REAR_STEER_CMD)()
+            cmd.header.stamp = state.header.stamp
+            cmd.angle_rad = 0.08
+            cmd.law = "rogue"
+            cmd.state_stamp = state.header.stamp
+            cmd.state_step = state.step
+            pubs[topics.REAR_STEER_CMD].publish(cmd)
+            sent += 2
+        node.create_subscription(msg(topics.STATE), topics.STATE, answer, topics.STREAM_QOS)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+    else:
+        k = 0
+        while time.monotonic() < end:
+            k += 1
+            state = msg(topics.STATE)()
+            conversions.set_stamp(state.header.stamp, 1e6 + k)
+            state.sim_time_s = 1e6 + k
+            state.step = 10 ** 9 + k
+            state.yaw_rate_radps = math.nan if k % 2 else 1e300
+            pubs[topics.STATE].publish(state)
+            cmd = msg(topics.REAR_STEER_CMD)()
+            conversions.set_stamp(cmd.state_stamp, 1e5 + k)  # a state of the future
+            cmd.state_step = 10 ** 8 + k
+            cmd.angle_rad = 0.08 if k % 3 else math.nan
+            cmd.law = "rogue"
+            pubs[topics.REAR_STEER_CMD].publish(cmd)
+            pubs[topics.DRIVER_INPUT].publish(
+                conversions.driver_msg(DriverCommand(1600.0, 100.0), 1e5 + k))
+            status = msg(topics.MANEUVER_STATUS)()
+            conversions.set_stamp(status.header.stamp, 1e6 + k)
+            status.done = True
+            status.end = "completed"
+            pubs[topics.MANEUVER_STATUS].publish(status)
+            sent += 4
+            time.sleep(0.002)
+    print(f"rogue {kind}: sent {sent} messages", flush=True)
+    node.destroy_node()
+    rclpy.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1], float(sys.argv[2])))

@@ -1,0 +1,218 @@
+"""The node graph under attack: rogue publishers, killed and stopped nodes, runs side by side
+under a CPU hog. Every case ends in a complete, exact record or a failure naming the cause.
+
+The reference for "exact" is the offline twin (:func:`fourws_run.closed_loop.run_closed_loop`):
+a lockstep graph run performs its float operations in the same order, so its recorded states
+equal the twin's bit for bit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fourws_analysis.bag import load_bag
+from fourws_ros import graph_run, topics
+from fourws_ros.domains import reserve_domain_id
+from fourws_run.bagfile import repair_bag
+from fourws_run.closed_loop import run_scenario
+from fourws_run.config import RunConfig
+from fourws_run.record import Outcome
+from fourws_run.scenario import load_scenario
+from fourws_sim.maneuvers import maneuver_spec_from_mapping
+
+ROGUE = Path(__file__).with_name("rogue_node.py")
+
+
+def _scenario(duration_s: float, **changes):
+    sc = load_scenario("default")
+    spec = sc.maneuver.to_dict()
+    spec["duration_s"] = duration_s
+    return dataclasses.replace(sc, maneuver=maneuver_spec_from_mapping(spec), **changes)
+
+
+def _assert_equals_twin(bag_path: Path, sc, law: str) -> None:
+    """The recorded states are the offline twin's, bit for bit, none missing."""
+    ref = run_scenario(sc, law)
+    state = load_bag(bag_path).topics[topics.STATE]
+    n = ref.time_s.size
+    assert len(state) == n + 1  # every tick's state and the final one
+    np.testing.assert_array_equal(state.fields["sim_time_s"][:n], ref.time_s)
+    np.testing.assert_array_equal(state.fields["yaw_rate_radps"][:n], ref["yaw_rate_radps"])
+
+
+@pytest.fixture
+def user_domain(monkeypatch):
+    """A free ROS domain given to the run as the user's ROS_DOMAIN_ID (so a rogue can be
+    started on it before the run)."""
+    lease = reserve_domain_id()
+    domain = lease.domain_id
+    lease.release()
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
+    return domain
+
+
+def _start_rogue(kind: str, seconds: float) -> subprocess.Popen:
+    proc = subprocess.Popen([sys.executable, str(ROGUE), kind, str(seconds)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            start_new_session=True)
+    line = proc.stdout.readline()
+    assert "rogue ready" in line, line
+    return proc
+
+
+def _stop(proc: subprocess.Popen) -> str:
+    try:
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    return out
+
+
+def test_rogue_garbage_is_refused_counted_and_the_run_is_exact(tmp_path, user_domain):
+    """A foreign node floods the run's domain with states of t = 1e6 s, NaN states, commands
+    for future states, NaN and 0.08 rad commands, a 100 rad driver input and 'done' maneuver
+    statuses. None of it reaches the run: the bag holds the twin's states exactly, none of
+    the rogue's messages, and the record counts what was refused and by whom."""
+    sc = _scenario(3.0)
+    rogue = _start_rogue("garbage", 30.0)
+    try:
+        run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
+                                  run_name="rogue")
+    finally:
+        os.killpg(rogue.pid, signal.SIGTERM)
+        _stop(rogue)
+    assert run.ok, run.reason
+    assert run.complete
+    _assert_equals_twin(run.bag_path, sc, "sol1")
+    # the rogue's messages were seen, counted, not stored
+    foreign = run.account.foreign_publishers
+    assert foreign.get(f"{topics.STATE} from rogue", 0) > 10
+    assert foreign.get(f"{topics.REAR_STEER_CMD} from rogue", 0) > 10
+    bag = load_bag(run.bag_path)
+    assert set(bag.topics[topics.REAR_STEER_CMD].fields["law"]) == {"sol1"}
+    assert np.all(np.isfinite(bag.topics[topics.STATE].fields["yaw_rate_radps"]))
+    # and the nodes refused them by content too (they cannot see publishers)
+    refused = run.rejections
+    assert any("fourws_maneuver" in k and "state" in k for k in refused), refused
+    assert any("fourws_simulator" in k and "rear_steer_cmd" in k for k in refused), refused
+    assert any("fourws_simulator" in k and "driver_input" in k for k in refused), refused
+
+
+def test_a_second_answering_publisher_fails_the_run_loudly(tmp_path, user_domain):
+    """A foreign node that answers every state with a plausible driver input and command: the
+    run cannot tell whose answer came first, so it must not pass as ok; the reason names the
+    second publisher."""
+    sc = _scenario(3.0)
+    rogue = _start_rogue("mimic", 30.0)
+    try:
+        run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
+                                  run_name="mimic")
+    finally:
+        os.killpg(rogue.pid, signal.SIGTERM)
+        _stop(rogue)
+    assert run.outcome == Outcome.FAILED
+    assert "second publisher" in run.reason
+
+
+def _fault(node: str, sig: signal.Signals):
+    def inject(group) -> None:
+        time.sleep(0.1)
+        os.kill(group.child(node).proc.pid, sig)
+    return inject
+
+
+@pytest.mark.parametrize("node, sig, expected", [
+    ("fourws_simulator", signal.SIGKILL, "node fourws_simulator was killed by SIGKILL"),
+    ("fourws_maneuver", signal.SIGKILL, "node fourws_maneuver was killed by SIGKILL"),
+    ("fourws_controller", signal.SIGKILL, "node fourws_controller was killed by SIGKILL"),
+    ("fourws_recorder", signal.SIGKILL, "node fourws_recorder was killed by SIGKILL"),
+    ("fourws_simulator", signal.SIGSTOP, "node fourws_simulator is stopped"),
+    ("fourws_maneuver", signal.SIGSTOP, "node fourws_maneuver is stopped"),
+    ("fourws_recorder", signal.SIGSTOP, "node fourws_recorder is stopped"),
+])
+def test_killed_or_stopped_node_fails_the_run_naming_it(tmp_path, monkeypatch, node, sig,
+                                                        expected):
+    """SIGKILL or SIGSTOP of a node mid-run: the run fails with a reason naming that node, no
+    process outlives the run, the record is written, and the bag is readable (a killed
+    recorder's after `repair`)."""
+    monkeypatch.setattr(graph_run, "STALL_TIMEOUT_S", 3.0)
+    sc = _scenario(60.0)
+    run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path, run_name="f",
+                              on_running=_fault(node, sig))
+    assert run.outcome == Outcome.FAILED
+    assert expected in run.reason, run.reason
+    assert all(code is not None for code in run.exit_codes.values()), run.exit_codes
+    assert (run.run_dir / "run.json").is_file()
+    if node == "fourws_recorder" and sig == signal.SIGKILL:
+        repair_bag(run.bag_path)
+    bag = load_bag(run.bag_path, allow_incomplete=True)
+    state = bag.topics[topics.STATE]
+    assert len(state) >= 1
+    # what was stored is the run's beginning, nothing lost in the middle
+    np.testing.assert_allclose(np.diff(state.time_s), sc.control_period_s, atol=1e-9)
+
+
+def test_side_by_side_runs_under_a_cpu_hog_are_complete_and_exact(tmp_path):
+    """Two `fourws run` at once while two busy processes load both cores: both bags are
+    complete and hold exactly the states of the same run alone (its offline twin)."""
+    scenario = tmp_path / "short.yaml"
+    scenario.write_text("vehicle: table_8_1\nmaneuver: step_steer_85kmh\nlaws: [sol1]\n")
+    sc = load_scenario(scenario)
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+            for _ in range(2)]
+    try:
+        runs = [subprocess.Popen([sys.executable, "-m", "fourws_cli.main", "run",
+                                  str(scenario), "--out", str(tmp_path / f"out{k}")],
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+                for k in range(2)]
+        outs = [p.communicate(timeout=300)[0] for p in runs]
+    finally:
+        for hog in hogs:
+            hog.kill()
+            hog.wait()
+    for proc, out in zip(runs, outs):
+        assert proc.returncode == 0, out
+        assert "recording: complete" in out
+    for k in range(2):
+        (bag,) = (tmp_path / f"out{k}").glob("*/bag")
+        _assert_equals_twin(bag, sc, "sol1")
+
+
+def test_realtime_run_whose_maneuver_stops_ends_naming_it(tmp_path):
+    """Realtime: the maneuver node is stopped (SIGSTOP) mid-run. The simulator does not drive
+    on with a frozen driver input: after driver_timeout_s (1 s of simulation time) without a
+    new one it ends the run, naming the maneuver node; nothing runs on past the maneuver."""
+    sc = _scenario(30.0, clock_mode="realtime")
+    run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path, run_name="rt",
+                              on_running=_fault("fourws_maneuver", signal.SIGSTOP))
+    assert run.outcome == Outcome.FAILED
+    assert "maneuver node stopped answering" in run.reason
+    assert run.sim_time_s < 10.0  # ended about 1 s after the stop, not at the 30 s end
+    assert all(code is not None for code in run.exit_codes.values())
+
+
+def test_aborted_maneuver_is_not_ok_and_exits_3(tmp_path):
+    """A constant-radius test whose path error limit is exceeded at once: the bag is
+    complete, but the run is 'aborted' with the time and the reason, exit code 3 -- never
+    'ok' with exit 0."""
+    scenario = tmp_path / "circle.yaml"
+    scenario.write_text(
+        "vehicle: table_8_1\nlaws: [fws]\nmaneuver: {type: constant_radius, "
+        "initial_speed_mps: 10.0, duration_s: 80.0, radius_m: 40.0, final_speed_mps: 12.0, "
+        "max_path_error_m: 0.001}\n")
+    res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "run", str(scenario),
+                          "--out", str(tmp_path / "out")], capture_output=True, text=True,
+                         timeout=300)
+    assert res.returncode == 3, res.stdout + res.stderr
+    assert "ABORTED" in res.stdout and "path error" in res.stdout
+    assert "recording: complete" in res.stdout
