@@ -33,6 +33,7 @@ import numpy as np
 from fourws_run import interface
 from fourws_run.accounting import RunAccount, TopicAccount
 from fourws_run.bagfile import BagError, BagWriter, read_bag, typestore
+from fourws_run.config import USER_LAW, RunConfig
 from fourws_run.interface import CLOCK as TOPIC_CLOCK
 from fourws_run.interface import DRIVER_INPUT as TOPIC_DRIVER
 from fourws_run.interface import IMU as TOPIC_IMU
@@ -410,17 +411,18 @@ def _run_description(run: RunData) -> dict[str, Any]:
     """The run configuration mapping: ``/fourws/run_config`` if the bag has one, else put
     together from the nodes' ``/fourws/node_config`` (a graph started by hand); the law of a
     controller that publishes no configuration is the name its commands give."""
-    from fourws_run.config import RunConfig
-
+    cmd = run.topics.get(TOPIC_REAR_CMD)
+    laws = sorted(set(cmd.fields["law"])) if cmd is not None and len(cmd) else []
     if TOPIC_RUN_CONFIG in run.topics:
-        return _json_object(run, TOPIC_RUN_CONFIG,
-                            str(run.topics[TOPIC_RUN_CONFIG].fields["data"][-1]))
+        config = _json_object(run, TOPIC_RUN_CONFIG,
+                              str(run.topics[TOPIC_RUN_CONFIG].fields["data"][-1]))
+        if config.get("law") == USER_LAW and laws:
+            config["law"] = "+".join(laws)  # a user's controller: the law its commands name
+        return config
     if TOPIC_NODE_CONFIG not in run.topics:
         return {}
     parts = [_json_object(run, TOPIC_NODE_CONFIG, str(text))
              for text in run.topics[TOPIC_NODE_CONFIG].fields["data"]]
-    cmd = run.topics.get(TOPIC_REAR_CMD)
-    laws = sorted(set(cmd.fields["law"])) if cmd is not None and len(cmd) else []
     try:
         config = RunConfig.from_node_configs(parts, law_label="+".join(laws))
     except (FourwsError, KeyError, TypeError, ValueError) as exc:

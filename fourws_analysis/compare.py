@@ -103,6 +103,10 @@ class RunAnalysis:
     eig_sweep: linearize.EigenSweep | None = None
     unavailable: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    #: What the bag says of its completeness: ``complete``, ``unverified`` (no accounting in
+    #: the bag) or ``INCOMPLETE: ...`` (analysed with ``--allow-incomplete``: every metric of
+    #: this run comes from a bag that misses messages).
+    recording: str = "unverified"
     steer_reference: str = "applied"
     steering_ratio: float | None = None
     applied_to_commanded: float | None = None
@@ -114,11 +118,12 @@ class RunAnalysis:
 
     @property
     def law(self) -> str:
-        """Rear-steer law of the run (``fws`` when not recorded)."""
-        law = self.run.config.get("law", "fws")
+        """Rear-steer law of the run as its bag describes it (``unknown`` when the bag does
+        not say: a law is never guessed)."""
+        law = self.run.config.get("law", "")
         if isinstance(law, Mapping):
-            law = law.get("name", law.get("type", "fws"))
-        return str(law or "fws")
+            law = law.get("name", law.get("type", ""))
+        return str(law or "unknown")
 
     @property
     def step_amplitude(self) -> dict[str, Any]:
@@ -139,6 +144,7 @@ class RunAnalysis:
         """Every metric as a JSON-ready mapping."""
         out: dict[str, Any] = {
             "maneuver": self.run.maneuver or None, "law": self.law,
+            "recording": self.recording,
             "model": self.run.config.get("model"), "speed_mps": self.speed_mps,
             "duration_s": float(self.run.time_s[-1] - self.run.time_s[0]),
             "sample_period_s": self.run.dt_s,

@@ -23,6 +23,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="resampling period in s (default: median state period)")
     parser.add_argument("--no-sweep", action="store_true",
                         help="skip the 8-DOF eigenvalues-vs-speed sweep")
+    parser.add_argument("--allow-incomplete", action="store_true",
+                        help="analyse a bag that is damaged or misses messages (a failed run, "
+                             "a killed recorder): its metrics are marked as from an "
+                             "incomplete recording")
     parser.add_argument("--timing", action="store_true", help="print the elapsed time")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -67,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     for path in args.bags:
         bar(f"reading {path}")
         try:
-            run_data = bagmod.load_bag(path)
+            run_data = bagmod.load_bag(path, allow_incomplete=args.allow_incomplete)
             uniform = bagmod.resample(run_data, args.dt)
         except FourwsError as exc:
             failures[path] = str(exc)
@@ -77,6 +81,9 @@ def run(args: argparse.Namespace) -> int:
             uniform.name, k = f"{base}#{k}", k + 1
         result = analyze_run(uniform, eig_sweep=not args.no_sweep, progress=bar)
         result.notes.extend(run_data.warnings)
+        result.recording = ("complete" if run_data.complete else "unverified"
+                            if run_data.complete is None else
+                            "INCOMPLETE: " + "; ".join(run_data.problems))
         analyses.append(result)
     index = None
     if args.report:

@@ -52,3 +52,12 @@ def test_contract_controller_runs_through_fourws_run(tmp_path):
     np.testing.assert_array_equal(cmd.fields["state_step"], state.fields["step"][:500])
     # and the rear steer was applied: the simulator used every command
     assert abs(expected[-1]) > 1e-4
+    # fourws analyze labels the run with the law the commands name (never a guess)
+    res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "analyze",
+                          str(tmp_path / "o" / "mine" / "bag"), "--json", "--quiet",
+                          "--no-sweep"], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    import json
+    (entry,) = json.loads(res.stdout)["runs"].values()
+    assert entry["law"] == "contract_zero_sideslip"
+    assert entry["recording"] == "complete"
