@@ -19,6 +19,7 @@ setup(
         (f"share/{PACKAGE}/config/maneuvers", glob("config/maneuvers/*.yaml")),
         (f"share/{PACKAGE}/config/scenarios", glob("config/scenarios/*.yaml")),
         (f"share/{PACKAGE}/config/params", glob("config/params/*.yaml")),
+        (f"share/{PACKAGE}/config/dds", glob("config/dds/*.xml")),
     ],
     install_requires=["setuptools", "numpy", "scipy", "pyyaml"],
     zip_safe=True,

@@ -244,7 +244,8 @@ class ControllerNode(Node):
     def on_shutdown(self, executor: Any) -> None:
         """Answer no more states; wait until what this node published is delivered."""
         self._closing = True
-        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder)
+        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder,
+                                  reporting.delivery_timeout(self))
 
     # ------------------------------------------------------------------ handshake
     def _on_state(self, raw: bytes) -> None:

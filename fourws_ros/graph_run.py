@@ -31,7 +31,7 @@ from typing import Any, Callable
 
 from fourws_ros import node_params, topics
 from fourws_ros.domains import DomainError, domain_for_run, graph_env
-from fourws_ros.identity import PublisherNames
+from fourws_ros.identity import PublisherNames, drain
 from fourws_ros.processes import (ProcessGroup, describe_exit, node_command, ros_args,
                                   set_fifo, user_command)
 from fourws_run.accounting import RunAccount
@@ -124,6 +124,10 @@ class _LauncherNode:
         # the domain goes to rclpy.init; the process environment keeps the user's
         # ROS_DOMAIN_ID (a later run in this process must see what the user set, not ours)
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        for key in ("FASTDDS_DEFAULT_PROFILES_FILE",):
+            value = graph_env(domain_id).get(key)
+            if value and not os.environ.get(key):
+                os.environ[key] = value
         self.context = Context()
         rclpy.init(args=[], context=self.context, domain_id=domain_id,
                    signal_handler_options=SignalHandlerOptions.NO)
@@ -137,14 +141,24 @@ class _LauncherNode:
         self.config_pub = self.node.create_publisher(String, topics.RUN_CONFIG,
                                                      topics.LATCHED_QOS)
         self.config_pub.publish(String(data=config_json))
-        msg = topics.message_class
-        self.node.create_subscription(msg(topics.MANEUVER_STATUS), topics.MANEUVER_STATUS,
-                                      self._on_maneuver, topics.STATUS_QOS)
-        self.node.create_subscription(msg(topics.SIM_STATUS), topics.SIM_STATUS, self._on_sim,
-                                      topics.STATUS_QOS)
-        self.node.create_subscription(msg(topics.RECORDER_STATUS), topics.RECORDER_STATUS,
-                                      self._on_recorder, topics.STATUS_QOS)
+        for topic, handler in ((topics.MANEUVER_STATUS, self._on_maneuver),
+                               (topics.SIM_STATUS, self._on_sim),
+                               (topics.RECORDER_STATUS, self._on_recorder)):
+            self._subscribe(topic, handler)
         self.pause = self.node.create_client(SetBool, topics.SRV_PAUSE)
+
+    def _subscribe(self, topic: str, handler: Callable[[Any, Any], None]) -> None:
+        """Subscribe ``handler(msg, info)``, taking every queued message per wake-up (a
+        foreign node flooding a status topic cannot push the run's own messages out)."""
+        msg_type = topics.message_class(topic)
+        holder: list[Any] = []
+
+        def callback(msg: Any, info: Any) -> None:
+            handler(msg, info)
+            drain(holder[0], msg_type, False, handler)
+
+        holder.append(self.node.create_subscription(msg_type, topic, callback,
+                                                    topics.STATUS_QOS))
 
     def spin(self, seconds: float) -> None:
         """Run callbacks for up to ``seconds``."""

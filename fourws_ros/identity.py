@@ -61,4 +61,22 @@ class PublisherNames:
         return self.name(topic, publisher_gid(info))
 
 
-__all__ = ["PublisherNames", "publisher_gid"]
+def drain(subscription: Any, msg_type: type, raw: bool,
+          receive: Any, limit: int = 100_000) -> int:
+    """Hand ``receive(msg, info)`` every message waiting in ``subscription``'s queue; the
+    count. The executor wakes a callback for one message at a time, which costs far more
+    than handling it: a node flooded by a foreign publisher would fall behind and lose the
+    run's own messages from its queue. Called from the subscription's callback."""
+    handle = subscription.handle
+    n = 0
+    while n < limit:
+        with handle:
+            taken = handle.take_message(msg_type, raw)
+        if taken is None:
+            break
+        receive(*taken)
+        n += 1
+    return n
+
+
+__all__ = ["PublisherNames", "drain", "publisher_gid"]

@@ -52,7 +52,7 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, Paramete
 from rclpy.node import Node
 
 from fourws_ros import topics
-from fourws_ros.identity import PublisherNames, publisher_gid
+from fourws_ros.identity import PublisherNames, drain, publisher_gid
 from fourws_run.accounting import Ledger
 from fourws_run.bagfile import BagError, BagWriter
 from fourws_sim.errors import ParameterError
@@ -210,23 +210,15 @@ class RecorderNode(Node):
                 self._take(topic, node, data, seq)
 
         def callback(data: bytes, info: Any) -> None:
-            # The executor hands over one message per wake-up, which costs far more than
-            # storing it. Take the rest of this topic's queue here, so a recorder that fell
-            # behind catches up at the speed of writing, not of the executor.
+            # the rest of this topic's queue is taken here: a recorder that fell behind
+            # catches up at the speed of writing, not of the executor
             self._last_rx = time.monotonic()
             receive(data, info)
-            handle = self._subs[topic].handle
-            taken_n = 1
-            for taken_n in range(2, topics.STREAM_DEPTH + 2):
-                with handle:
-                    taken = handle.take_message(msgtype, True)
-                if taken is None:
-                    break
-                receive(*taken)
+            more = drain(self._subs[topic], msgtype, True, receive, topics.STREAM_DEPTH)
             # report often enough that the simulator's flow window never waits on a report:
             # after a batch (the recorder was behind) or every STATUS_EVERY messages
-            self._unreported += taken_n - 1
-            if taken_n > 2 or self._unreported >= STATUS_EVERY:
+            self._unreported += 1 + more
+            if more or self._unreported >= STATUS_EVERY:
                 self._publish_status()
 
         return callback
@@ -272,12 +264,15 @@ class RecorderNode(Node):
         else:
             self.ledger.on_message(topic, "", seq)  # counted foreign: unidentifiable
 
-    def _resolve_pending(self) -> None:
+    def _resolve_pending(self, final: bool = False) -> None:
+        """Store or count the messages of publishers identified meanwhile; those still
+        unknown after :data:`UNIDENTIFIED_AFTER_S` (or at ``final``, the bag closing) are
+        foreign."""
         for gid, (since, held) in list(self._pending.items()):
             node = None
             for topic in {t for t, _, _ in held}:
                 node = self._names.name(topic, gid) or node
-            if node is None and time.monotonic() - since < UNIDENTIFIED_AFTER_S:
+            if node is None and not final and time.monotonic() - since < UNIDENTIFIED_AFTER_S:
                 continue
             del self._pending[gid]
             for topic, data, seq in held:
@@ -358,7 +353,7 @@ class RecorderNode(Node):
                    and time.monotonic() - start < 30.0):
                 executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
             if self._pending:
-                self._resolve_pending()
+                self._resolve_pending(final=True)
         self._close()
 
 

@@ -17,8 +17,17 @@ from fourws_ros import topics
 from fourws_run.interface import WRITER_ROLES
 from fourws_run.ticks import Rejections
 
-#: How long a stopping node waits for its subscribers to acknowledge everything, s.
+#: How long a node that ended its run waits for its subscribers to acknowledge everything, s.
 DELIVERY_TIMEOUT_S = 30.0
+#: The same for a node stopped by a signal (the run is being aborted; a subscriber that was
+#: killed never acknowledges, and the launcher must not wait for its lease to expire), s.
+SIGNAL_DELIVERY_TIMEOUT_S = 3.0
+
+
+def delivery_timeout(node: Any) -> float:
+    """How long ``node`` waits to deliver before exiting: long when it ended by itself
+    (``finished``), short when a signal stopped it."""
+    return DELIVERY_TIMEOUT_S if getattr(node, "finished", False) else SIGNAL_DELIVERY_TIMEOUT_S
 
 
 class CountingPublisher:
@@ -99,8 +108,13 @@ class RecorderWatch:
     """What the recorder reports stored (``/fourws/recorder_status``), for a node that must
     know its messages are in the bag before it exits."""
 
+    #: A recorder that has sent no status for this long (wall time; it reports every 0.1 s)
+    #: is gone -- killed, or stopped -- and there is no point waiting for it, s.
+    SILENT_S = 2.0
+
     def __init__(self, node: Any, subscribe: bool = True) -> None:
         self.stored: dict[str, int] | None = None
+        self._heard = 0.0
         if subscribe:
             node.create_subscription(topics.message_class(topics.RECORDER_STATUS),
                                      topics.RECORDER_STATUS, self.update, topics.STATUS_QOS)
@@ -108,7 +122,16 @@ class RecorderWatch:
     def update(self, msg: Any) -> None:
         """Take a ``RecorderStatus`` (the subscription calls it; a node that subscribes itself
         passes the messages on)."""
+        import time
+
         self.stored = dict(zip(msg.topics, (int(n) for n in msg.stored)))
+        self._heard = time.monotonic()
+
+    def silent(self) -> bool:
+        """A recorder was heard, and has been silent for :attr:`SILENT_S` since."""
+        import time
+
+        return self.stored is not None and time.monotonic() - self._heard > self.SILENT_S
 
     def holds(self, counts: Mapping[str, int]) -> bool:
         """The recorder has stored at least ``counts`` of every topic it records that only
@@ -125,10 +148,10 @@ class RecorderWatch:
 def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
                    watch: RecorderWatch | None = None,
                    timeout_s: float = DELIVERY_TIMEOUT_S) -> bool:
-    """Wait until what this node published is delivered: every matched subscriber has
-    acknowledged it, or the recorder reports it stored (a subscriber that died without
-    leaving the graph -- a killed launcher -- never acknowledges; the recorder's word is
-    what matters for the bag). False (and an error logged) after ``timeout_s``."""
+    """Wait until every matched subscriber has acknowledged what this node published (the
+    simulator needs the maneuver's last status, the recorder everything). Gives up, False
+    with an error logged, after ``timeout_s`` or once the recorder has gone silent (a killed
+    recorder's readers stay in the graph for seconds and never acknowledge)."""
     import time
 
     from rclpy.duration import Duration
@@ -138,8 +161,10 @@ def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
     while True:
         if all(c.pub.wait_for_all_acked(now) for c in counts.publishers):
             return True
-        if watch is not None and watch.holds(counts.counts):
-            return True
+        if watch is not None and watch.silent():
+            logger.error("the recorder went silent before it held everything this node "
+                         "published")
+            return False
         if time.monotonic() > deadline:
             late = [c.topic for c in counts.publishers if not c.pub.wait_for_all_acked(now)]
             logger.error(f"not every subscriber acknowledged {', '.join(late)} within "
@@ -152,5 +177,5 @@ def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
 
 
 __all__ = ["CountingPublisher", "DELIVERY_TIMEOUT_S", "PublishCounts", "RecorderWatch",
-           "fill_accounting",
+           "SIGNAL_DELIVERY_TIMEOUT_S", "delivery_timeout", "fill_accounting",
            "publish_counted_status", "publish_node_config", "wait_delivered"]

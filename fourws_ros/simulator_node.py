@@ -68,6 +68,9 @@ MIN_STEP_S, MAX_STEP_S = 1e-5, 0.1
 #: Lockstep: wall time to wait for the controller after it has missed a tick, s (a healthy
 #: controller answers within ~1 ms).
 LOST_WAIT_S = 0.02
+#: After the simulation ended: how long (wall) the final status waits for the recorder to
+#: hold everything the run sent, s.
+FINAL_WAIT_S = 10.0
 #: GIL switch interval while the realtime thread runs, s (Python's default 5 ms would let a
 #: subscriber callback delay a step by up to 5 ms).
 _SWITCH_INTERVAL_S = 1e-4
@@ -272,6 +275,9 @@ class SimulatorNode(Node):
         self.ticks = 0
         self._sent_at = 0.0
         self._await_since = 0.0
+        self._reported_wait = False
+        self._final_sent = False
+        self._final_due = 0.0
         self._started = False
 
     @property
@@ -333,6 +339,9 @@ class SimulatorNode(Node):
     def _on_recorder_status(self, msg: Any) -> None:
         self._recorder.update(msg)
         self.window.update(self._recorder.stored or {})
+        if self.ended:
+            self._try_final()
+            return
         self._recorder_seen = True
         held = self._held
         if held is not None and not self._holding_back():
@@ -371,13 +380,17 @@ class SimulatorNode(Node):
 
     # ------------------------------------------------------------------ running
     def _housekeeping(self) -> None:
-        if self.ended or self.paused:
+        if self.ended:
+            self._try_final()
+            return
+        if self.paused:
             return
         if not self._started:
             self._start()
             return
         if self.clock_mode == "lockstep":
             if self.answers.awaited is None or self.answers.driver is None:
+                self._report_long_wait()
                 return  # no tick sent, or the maneuver has not answered yet (it ends runs)
             waited = time.monotonic() - self._await_since
             # once the controller has missed a tick, the following ones wait only
@@ -386,6 +399,17 @@ class SimulatorNode(Node):
             limit = LOST_WAIT_S if self.command_timed_out else self._cfg["command_timeout_s"]
             if waited > limit:
                 self._lockstep_advance()
+            self._report_long_wait()
+
+    def _report_long_wait(self) -> None:
+        """A tick (or a held tick) waiting over a second: publish a status saying for what,
+        so a stalled run names the node (the periodic statuses are sent as ticks go out)."""
+        tick = self.answers.awaited or self._held
+        if tick is not None and not self._reported_wait and \
+                time.monotonic() - (self._await_since if self._held is None
+                                    else self._held_since) > 1.0:
+            self._reported_wait = True
+            self._publish_status(tick.t)
 
     def _graph_ready(self) -> bool:
         need = int(self._param("expected_state_subscribers"))
@@ -419,9 +443,33 @@ class SimulatorNode(Node):
             self.get_logger().error(f"run stopped: {reason}")
         else:
             self.get_logger().info(f"run ended: {reason}")
+        self._final_due = time.monotonic()
+        self._try_final()
+
+    def _try_final(self) -> None:
+        """Send the final status once the recorder holds everything the run sent (so a node
+        that exits on the final status, as a user's controller may, loses nothing in
+        flight), or after :data:`FINAL_WAIT_S` of waiting, or at once without a recorder."""
+        if not self.ended or self._final_sent:
+            return
+        if self._recorder_behind() and time.monotonic() - self._final_due < FINAL_WAIT_S:
+            return  # the recorder's next status (or the housekeeping timer) tries again
+        self._final_sent = True
         self._publish_status(self.engine.sim.time_s, final=True)
         if bool(self._param("exit_when_done")):
             self.finished = True
+
+    def _recorder_behind(self) -> bool:
+        """A recorder is there and has not stored all the run has sent on some topic."""
+        watch = self._recorder
+        if watch.stored is None or watch.silent():
+            return False
+        book = self._book()
+        sent = dict(self.counts.counts)
+        sent[topics.DRIVER_INPUT] = book.driver_inputs_accepted
+        sent[topics.REAR_STEER_CMD] = book.commands_accepted
+        return any(sent.get(t, 0) > watch.stored[t] for t in _FLOW_TOPICS
+                   if t in watch.stored and t != topics.SIM_STATUS)
 
     # -- lockstep
     def _holding_back(self) -> str:
@@ -434,6 +482,7 @@ class SimulatorNode(Node):
         if self._holding_back():
             self._held = tick  # the recorder's next status releases it
             self._held_since = time.monotonic()
+            self._reported_wait = False
             return
         self._send_tick(tick)
 
@@ -448,6 +497,7 @@ class SimulatorNode(Node):
             return
         self.answers.expect(tick)
         self._await_since = time.monotonic()
+        self._reported_wait = False
         self._sent_at = time.perf_counter()
         self.state_pub.publish(raw)  # first: the answers' critical path starts here
         self.clock_pub.publish(cdr.encode_clock(tick.t))
@@ -616,8 +666,11 @@ class SimulatorNode(Node):
                 f"recorder {self.window.holds} times, {self.held_s:.3f} s in all")
         if not self.ended:
             self.ended = "stopped before the maneuver was done (signal)"
-            self._publish_status(self.engine.tick.t, final=True)
-        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder)
+        if not self._final_sent:
+            self._final_sent = True
+            self._publish_status(self.engine.sim.time_s, final=True)
+        reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder,
+                                  reporting.delivery_timeout(self))
 
 
 def _make_thread_realtime(priority: int, logger: Any) -> None:
