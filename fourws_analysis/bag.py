@@ -292,9 +292,11 @@ def _flatten(store: Any, msg: Any, msgtype: str, prefix: str, out: dict[str, Any
             _flatten(store, value, detail, f"{full}.", out)
         elif kind == Nodetype.BASE:
             out[full] = value
-        elif kind == Nodetype.ARRAY and isinstance(value, np.ndarray):
+        elif kind in (Nodetype.ARRAY, Nodetype.SEQUENCE) and isinstance(value, np.ndarray):
             out[full] = value
-        # sequences and arrays of messages are not used by the analysis
+        elif kind == Nodetype.SEQUENCE and all(isinstance(v, str) for v in value):
+            out[full] = list(value)
+        # arrays of messages are not used by the analysis
 
 
 def _decode_generic(msgtype: str, raws: list[bytes]) -> dict[str, np.ndarray]:
@@ -309,6 +311,11 @@ def _decode_generic(msgtype: str, raws: list[bytes]) -> dict[str, np.ndarray]:
         values = [row[key] for row in rows]
         if isinstance(values[0], str):
             result[key] = np.array(values, dtype=object)
+        elif isinstance(values[0], (list, np.ndarray)) and (
+                isinstance(values[0], list) or len({len(v) for v in values}) > 1):
+            # a sequence per message (lengths differ): one object per message
+            result[key] = np.empty(len(values), dtype=object)
+            result[key][:] = values
         else:
             result[key] = np.asarray(values)
     return result
