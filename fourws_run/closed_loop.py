@@ -53,6 +53,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from fourws_run.config import RunConfig
 from fourws_run.ticks import (InputLimits, LockstepAnswers, TickEngine, law_input,
                               whole_multiple)
 from fourws_sim.drivers import DriverCommand
@@ -250,12 +251,11 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         "drive_torque_nm": np.array([d.drive_torque_nm for d in commands]),
         "brake_torque_nm": np.array([d.brake_torque_nm for d in commands]),
     }
-    config = {
-        "vehicle": vehicle.to_dict(), "belief_vehicle": belief.name, "maneuver": man.to_dict(),
-        "law": law_name, "law_options": dict(law_options or {}), "model": model, "tire": tire,
-        "integrator": integrator, "integration_step_s": dt_s,
-        "control_period_s": control_period_s,
-    }
+    config = RunConfig(vehicle=vehicle, belief=belief, maneuver=man.spec, law=law_name,
+                       law_options=dict(law_options or {}), model=model, tire=tire,
+                       integrator=integrator, integration_step_s=dt_s,
+                       control_period_s=control_period_s, state_period_s=control_period_s,
+                       recorded_topics=()).to_dict()
     return ClosedLoopResult(
         time_s=np.asarray(times), outputs=outputs, driver=driver,
         rear_law_rad=np.asarray(law_cmds), rear_angle_rad=np.asarray(rear), phase=phases,
@@ -472,11 +472,22 @@ def scenario_for_law(scenario: Any, law: str) -> Any:
                                                                           maneuver=spec)
 
 
+def run_twin(config: RunConfig, max_ticks: int | None = None) -> ClosedLoopResult:
+    """The offline twin of the graph run ``config`` describes (:func:`run_closed_loop` with
+    its vehicle, belief, maneuver, law, model, integrator and periods): what a lockstep graph
+    run of the same :class:`~fourws_run.config.RunConfig` records, bit for bit."""
+    return run_closed_loop(config.vehicle, config.maneuver, config.law, model=config.model,
+                           dt_s=config.integration_step_s,
+                           control_period_s=config.control_period_s,
+                           belief_vehicle=config.belief, integrator=config.integrator,
+                           law_options=config.law_options, max_ticks=max_ticks)
+
+
 def run_scenario(scenario: Any, law_name: str | None = None) -> ClosedLoopResult:
     """Run one law of a :class:`fourws_run.scenario.Scenario` offline (its first law by
-    default): the reference a lockstep run of the node graph with the same scenario matches.
-    A step steer with a target lateral acceleration is first resolved for the law
-    (:func:`scenario_for_law`).
+    default): the reference a lockstep run of the node graph with the same scenario matches
+    (both go through :meth:`RunConfig.from_scenario`, which also resolves a step steer to a
+    target lateral acceleration for the law).
 
     Raises
     ------
@@ -487,16 +498,9 @@ def run_scenario(scenario: Any, law_name: str | None = None) -> ClosedLoopResult
     if law not in scenario.laws:
         raise ParameterError("law", f"{law!r} is not in the scenario's laws "
                              f"({', '.join(scenario.laws)})", scenario.source or scenario.name)
-    scenario = scenario_for_law(scenario, law)
-    vehicle = scenario.build_vehicle()
-    return run_closed_loop(vehicle, scenario.maneuver, law, model=scenario.model,
-                           dt_s=scenario.integration_step_s,
-                           control_period_s=scenario.control_period_s,
-                           belief_vehicle=scenario.build_belief(vehicle),
-                           integrator=scenario.integrator,
-                           law_options=scenario.law_options.get(law))
+    return run_twin(RunConfig.from_scenario(scenario, law))
 
 
-__all__ = ["AmplitudeSearch", "ClosedLoopResult", "find_step_amplitude",
+__all__ = ["AmplitudeSearch", "ClosedLoopResult", "find_step_amplitude", "run_twin",
            "resolve_maneuver_for_law", "run_closed_loop", "run_scenario", "scenario_for_law",
            "steady_lateral_accel"]

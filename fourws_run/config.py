@@ -194,7 +194,7 @@ class RunConfig:
         ParameterError
             The step target cannot be reached with the law.
         """
-        from fourws_run.closed_loop import scenario_for_law
+        from fourws_run.closed_loop import scenario_for_law  # the twin imports this module
 
         ctrl = controller if controller is not None else scenario.controller
         if ctrl.builtin:
