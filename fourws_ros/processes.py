@@ -134,8 +134,18 @@ def describe_exit(child: Child, with_log: bool = True) -> str:
     else:
         what = f"exited with code {code}"
     text = f"node {child.name} {what} (log {child.log_path})"
-    tail = child.log_tail() if with_log else ""
-    return f"{text}:\n{tail}" if tail else text
+    cause = _last_line(child.log_tail()) if with_log else ""
+    return f"{text}: {cause}" if cause else text
+
+
+def _last_line(text: str) -> str:
+    """The last meaningful line of a node's log (a Python traceback's last line is its
+    error), without terminal colour codes, at most 300 characters."""
+    import re
+
+    lines = [re.sub(r"\x1b\[[0-9;]*m", "", ln).strip() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln and not ln.startswith("^")]
+    return lines[-1][:300] if lines else ''
 
 
 class ProcessGroup:

@@ -165,6 +165,7 @@ class RecorderNode(Node):
         self.recorded = wanted
         self.ledger = Ledger(wanted, writers)
         self.closed = False
+        self._failed = False
         self.finished = False  # run_node: stop spinning
         self.stop_reason = ""
         self._flush_ns = int(float(self.get_parameter("flush_period_s").value) * _NS_PER_S)
@@ -235,11 +236,33 @@ class RecorderNode(Node):
             t_ns = self._last_stamp_ns
         elif t_ns > self._last_stamp_ns:
             self._last_stamp_ns = t_ns
-        self.bag.write_raw(topic, data, t_ns, topics.TOPIC_TYPES[topic], seq)
-        if (self._last_stamp_ns - self._flushed_ns >= self._flush_ns
-                or self._last_rx - self._flushed_wall >= self._flush_wall_s):
-            self._flush()
+        if self._failed:
+            return
+        try:
+            self.bag.write_raw(topic, data, t_ns, topics.TOPIC_TYPES[topic], seq)
+            if (self._last_stamp_ns - self._flushed_ns >= self._flush_ns
+                    or self._last_rx - self._flushed_wall >= self._flush_wall_s):
+                self._flush()
+        except OSError as exc:
+            self._fail(exc)
+            return
         self._status_due = True
+
+    def _fail(self, exc: OSError) -> None:
+        """The bag cannot be written (disk full, file system gone read-only): stop with the
+        reason; what the last flush put on disk stays readable (`fourws bag repair`)."""
+        from fourws_ros.runtime import EXIT_INCOMPLETE
+
+        self._failed = True
+        self.closed = True
+        self.stop_reason = f"cannot write the bag {self.bag.path}: {exc.strerror or exc}"
+        self.exit_code = EXIT_INCOMPLETE
+        self.finished = True
+        self.get_logger().error(self.stop_reason)
+        try:
+            self.bag.abort()
+        except OSError:
+            pass
 
     def _read_report(self, topic: str, node: str, data: bytes) -> None:
         from rclpy.serialization import deserialize_message
@@ -290,7 +313,13 @@ class RecorderNode(Node):
         self._check_complete()
 
     def _flush(self) -> None:
-        self.bag.flush()
+        if self._failed:
+            return
+        try:
+            self.bag.flush()
+        except OSError as exc:
+            self._fail(exc)
+            return
         self._flushed_ns = self._last_stamp_ns
         self._flushed_wall = time.monotonic()
 
@@ -326,7 +355,11 @@ class RecorderNode(Node):
             return
         account = self.ledger.account()
         self.bag.set_accounting(account.to_dict(), account.complete)
-        self.bag.close()
+        try:
+            self.bag.close()
+        except OSError as exc:
+            self._fail(exc)
+            return
         self.closed = True
         if not account.complete:
             from fourws_ros.runtime import EXIT_INCOMPLETE

@@ -223,3 +223,45 @@ def test_aborted_maneuver_is_not_ok_and_exits_3(tmp_path):
     assert res.returncode == 3, res.stdout + res.stderr
     assert "ABORTED" in res.stdout and "path error" in res.stdout
     assert "recording: complete" in res.stdout
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 256 KiB file system (tmpfs), and one mounted read-only; skipped where mounting is
+    not permitted."""
+    full, ro = tmp_path / "full", tmp_path / "ro"
+    full.mkdir()
+    ro.mkdir()
+    mounted = []
+    for where, opts in ((full, "size=256k"), (ro, "ro,size=64k")):
+        res = subprocess.run(["mount", "-t", "tmpfs", "-o", opts, "tmpfs", str(where)],
+                             capture_output=True, text=True)
+        if res.returncode != 0:
+            for m in mounted:
+                subprocess.run(["umount", str(m)], capture_output=True)
+            pytest.skip(f"cannot mount a tmpfs here ({res.stderr.strip()})")
+        mounted.append(where)
+    try:
+        yield full, ro
+    finally:
+        for m in mounted:
+            subprocess.run(["umount", "-l", str(m)], capture_output=True)
+
+
+def test_full_and_read_only_disks_end_in_one_line_errors(tmp_path, small_disk):
+    """A disk that fills up during the run: the recorder stops with the reason, the run fails
+    naming it, no traceback, no process left. A read-only output folder: a one-line error
+    before anything starts."""
+    full, ro = small_disk
+    res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "run", "--law", "sol1",
+                          "--out", str(full)], capture_output=True, text=True, timeout=300)
+    out = res.stdout + res.stderr
+    assert res.returncode == 1, out
+    assert "No space left on device" in out or "no space left on device" in out
+    assert "Traceback" not in out
+    res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "run", "--law", "sol1",
+                          "--out", str(ro / "runs")], capture_output=True, text=True,
+                         timeout=300)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "read-only file system" in lines[0].lower(), res.stderr
