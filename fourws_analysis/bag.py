@@ -32,7 +32,7 @@ import numpy as np
 
 from fourws_run import interface
 from fourws_run.accounting import RunAccount, TopicAccount
-from fourws_run.bagfile import BagError, BagWriter, read_bag, typestore
+from fourws_run.bagfile import BagError, BagWriter, bag_typestore, read_bag, typestore
 from fourws_run.config import USER_LAW, RunConfig
 from fourws_run.interface import CLOCK as TOPIC_CLOCK
 from fourws_run.interface import DRIVER_INPUT as TOPIC_DRIVER
@@ -250,9 +250,10 @@ def _walk_layout(store: Any, msgtype: str, raw: bytes, pos: int, prefix: str,
     return pos
 
 
-def _decode_fixed(msgtype: str, raws: list[bytes]) -> dict[str, np.ndarray] | None:
+def _decode_fixed(msgtype: str, raws: list[bytes], store: Any = None
+                  ) -> dict[str, np.ndarray] | None:
     """Bulk-decode messages that share one layout; ``None`` if they do not."""
-    store = typestore()
+    store = store or typestore()
     first = raws[0]
     if first[:2] != b"\x00\x01":  # only little-endian plain CDR
         return None
@@ -299,8 +300,9 @@ def _flatten(store: Any, msg: Any, msgtype: str, prefix: str, out: dict[str, Any
         # arrays of messages are not used by the analysis
 
 
-def _decode_generic(msgtype: str, raws: list[bytes]) -> dict[str, np.ndarray]:
-    store = typestore()
+def _decode_generic(msgtype: str, raws: list[bytes], store: Any = None
+                    ) -> dict[str, np.ndarray]:
+    store = store or typestore()
     rows: list[dict[str, Any]] = []
     for raw in raws:
         flat: dict[str, Any] = {}
@@ -321,9 +323,9 @@ def _decode_generic(msgtype: str, raws: list[bytes]) -> dict[str, np.ndarray]:
     return result
 
 
-def _decode(msgtype: str, raws: list[bytes]) -> dict[str, np.ndarray]:
-    fixed = _decode_fixed(msgtype, raws)
-    return fixed if fixed is not None else _decode_generic(msgtype, raws)
+def _decode(msgtype: str, raws: list[bytes], store: Any) -> dict[str, np.ndarray]:
+    fixed = _decode_fixed(msgtype, raws, store)
+    return fixed if fixed is not None else _decode_generic(msgtype, raws, store)
 
 
 def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
@@ -366,7 +368,7 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
         warnings.append("the bag carries no recording accounting (written by an older fourws "
                         "or another tool): its completeness is not verified")
     wanted = set(topics) if topics is not None else None
-    store = typestore()
+    store = bag_typestore(check.schemas)  # the definitions the bag was written with
     raw_by_topic: dict[str, list[bytes]] = {}
     recv_by_topic: dict[str, list[int]] = {}
     types: dict[str, str] = {}
@@ -387,7 +389,7 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
     for topic, raws in raw_by_topic.items():
         msgtype = types[topic]
         try:
-            fields = _decode(msgtype, raws)
+            fields = _decode(msgtype, raws, store)
         except (ValueError, IndexError, KeyError, UnicodeDecodeError) as exc:
             raise BagError(f"bag {str(path)!r}: cannot decode {topic} ({msgtype}): {exc}") \
                 from None

@@ -87,6 +87,37 @@ def typestore() -> Any:
     return store
 
 
+def bag_typestore(schemas: Mapping[str, tuple[str, bytes]]) -> Any:
+    """A typestore for decoding one bag: the ROS 2 standard types plus the fourws message
+    definitions *the bag carries* (its MCAP schemas), so a bag recorded before a ``.msg`` file
+    changed still decodes as it was written. Types the bag has no schema for come from
+    :func:`typestore`.
+    """
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    key = tuple(sorted((name, bytes(data)) for name, (enc, data) in schemas.items()
+                       if enc == "ros2msg" and name.startswith(f"{interface.MSG_PACKAGE}/")))
+    return _bag_typestore(key) if key else typestore()
+
+
+@lru_cache(maxsize=16)
+def _bag_typestore(key: tuple[tuple[str, bytes], ...]) -> Any:
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_KILTED)
+    own = dict(key)
+    types: dict[str, Any] = {}
+    for path in sorted(MSG_DIR.glob("*.msg")):
+        name = f"{interface.MSG_PACKAGE}/msg/{path.stem}"
+        if name not in own:
+            types.update(get_types_from_msg(path.read_text(), name))
+    for name, data in own.items():
+        types.update({k: v for k, v in get_types_from_msg(data.decode(), name).items()
+                      if k.startswith(f"{interface.MSG_PACKAGE}/")})
+    store.register(types)
+    return store
+
+
 # --------------------------------------------------------------------------------------------
 # writer
 
@@ -475,6 +506,8 @@ class BagCheck:
     complete: bool | None
     problems: list[str] = field(default_factory=list)
     accounting: dict[str, Any] = field(default_factory=dict)
+    #: The message definitions the bag carries: type -> (encoding, definition).
+    schemas: dict[str, tuple[str, bytes]] = field(default_factory=dict)
 
     def summary(self) -> str:
         """One line: complete, unverified, or the problems."""
@@ -513,10 +546,12 @@ def read_bag(path: str | Path) -> tuple[list[RawMessage], BagCheck]:
     problems: list[str] = []
     messages: list[RawMessage] = []
     mcap_meta: dict[str, dict[str, str]] = {}
+    schemas: dict[str, tuple[str, bytes]] = {}
     for file in files:
         scan = scan_mcap(file)
         messages.extend(scan.messages)
         mcap_meta.update(scan.metadata)
+        schemas.update(scan.schemas)
         if scan.damage:
             problems.append(f"{file.name} damaged after {len(scan.messages)} messages "
                             f"({scan.damage})")
@@ -554,7 +589,7 @@ def read_bag(path: str | Path) -> tuple[list[RawMessage], BagCheck]:
             complete = not problems
     if problems:
         complete = False
-    return messages, BagCheck(str(path), counts, complete, problems, accounting)
+    return messages, BagCheck(str(path), counts, complete, problems, accounting, schemas)
 
 
 # --------------------------------------------------------------------------------------------
@@ -631,6 +666,6 @@ def repair_bag(path: str | Path) -> RepairResult:
 
 
 __all__ = ["BAG_VERSION", "BagCheck", "BagError", "BagWriter", "CHUNK_BYTES", "KEY_ACCOUNTING",
-           "KEY_COMPLETE", "MSG_DIR", "McapScan", "RawMessage", "RepairResult", "mcap_files",
+           "KEY_COMPLETE", "MSG_DIR", "McapScan", "RawMessage", "RepairResult", "bag_typestore", "mcap_files",
            "metadata_counts", "read_bag", "read_metadata", "repair_bag", "scan_mcap",
            "typestore", "verify_bag"]
