@@ -270,7 +270,7 @@ class Ledger:
         return RunAccount(topics, notes, foreign_pubs)
 
 
-def account_from_messages(messages: Iterable[Any]) -> RunAccount:
+def account_from_messages(messages: Iterable[Any], store: Any) -> RunAccount:
     """A verdict from a bag's own messages (for repaired bags and bags without accounting).
 
     The publishers' final counts come from the last ``SimulatorStatus`` with ``final`` and the
@@ -281,10 +281,9 @@ def account_from_messages(messages: Iterable[Any]) -> RunAccount:
     Parameters
     ----------
     messages : iterable of fourws_run.bagfile.RawMessage
+    store : rosbags Typestore
+        Decodes the status messages (:func:`fourws_run.bagfile.bag_typestore` of the bag).
     """
-    from fourws_run.bagfile import typestore
-
-    store = typestore()
     stored: dict[str, int] = {}
     seqs: dict[str, list[int]] = {}
     sim_final: Any = None

@@ -31,7 +31,18 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Mapping
 
+import yaml
+from mcap.exceptions import McapError
+from mcap.records import Channel, DataEnd, Footer, Message, Metadata, Schema
+from mcap.stream_reader import CRCValidationError, StreamReader
+from mcap.writer import CompressionType, Writer as McapFileWriter
+from rosbags.interfaces import (MessageDefinitionFormat, Qos, QosDurability, QosHistory,
+                                QosLiveliness, QosReliability, QosTime)
+from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
 from fourws_run import interface
+from fourws_run.accounting import RunAccount, account_from_messages
 from fourws_sim.errors import FourwsError
 from fourws_sim.params import find_resource_dir
 
@@ -76,8 +87,6 @@ def typestore() -> Any:
     -------
     rosbags.typesys.store.Typestore
     """
-    from rosbags.typesys import Stores, get_typestore, get_types_from_msg
-
     store = get_typestore(Stores.ROS2_KILTED)
     types: dict[str, Any] = {}
     for path in sorted(MSG_DIR.glob("*.msg")):
@@ -93,8 +102,6 @@ def bag_typestore(schemas: Mapping[str, tuple[str, bytes]]) -> Any:
     changed still decodes as it was written. Types the bag has no schema for come from
     :func:`typestore`.
     """
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-
     key = tuple(sorted((name, bytes(data)) for name, (enc, data) in schemas.items()
                        if enc == "ros2msg" and name.startswith(f"{interface.MSG_PACKAGE}/")))
     return _bag_typestore(key) if key else typestore()
@@ -102,8 +109,6 @@ def bag_typestore(schemas: Mapping[str, tuple[str, bytes]]) -> Any:
 
 @lru_cache(maxsize=16)
 def _bag_typestore(key: tuple[tuple[str, bytes], ...]) -> Any:
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-
     store = get_typestore(Stores.ROS2_KILTED)
     own = dict(key)
     types: dict[str, Any] = {}
@@ -127,22 +132,18 @@ class _McapStorage:
     chunk and data-section CRCs, explicit chunk flushes, publisher sequence numbers."""
 
     def __init__(self, path: Path, compression: Any) -> None:
-        from mcap.writer import CompressionType, Writer
-
         del compression  # fourws bags are not compressed (the CRCs cover the raw records)
         self.path = path / f"{path.name}.mcap"
         self._file = self.path.open("xb")
-        self._mcap = Writer(self._file, chunk_size=CHUNK_BYTES,
-                            compression=CompressionType.NONE, enable_crcs=True,
-                            enable_data_crcs=True)
+        self._mcap = McapFileWriter(self._file, chunk_size=CHUNK_BYTES,
+                                    compression=CompressionType.NONE, enable_crcs=True,
+                                    enable_data_crcs=True)
         self._mcap.start(profile="ros2", library=f"fourws-{_fourws_version()}")
         self._schemas: dict[str, int] = {}
         self._channels: dict[int, int] = {}
         self.metadata: dict[str, str] = {}
 
     def add_msgtype(self, connection: Any) -> None:
-        from rosbags.interfaces import MessageDefinitionFormat
-
         encoding = ("ros2msg" if connection.msgdef.format == MessageDefinitionFormat.MSG
                     else "ros2idl")
         self._schemas[connection.msgtype] = self._mcap.register_schema(
@@ -177,13 +178,11 @@ class _McapStorage:
         self._file.close()
 
 
-def _writer_class() -> type:
-    from rosbags.rosbag2 import StoragePlugin, Writer
+class _Writer(Writer):  # type: ignore[misc]
+    """rosbags' rosbag2 writer with the MCAP storage of :class:`_McapStorage` (its
+    documented ``STORAGE_PLUGINS`` table)."""
 
-    class _Writer(Writer):  # type: ignore[misc]
-        STORAGE_PLUGINS = {StoragePlugin.MCAP: _McapStorage}
-
-    return _Writer
+    STORAGE_PLUGINS = {StoragePlugin.MCAP: _McapStorage}
 
 
 class BagWriter:
@@ -211,11 +210,9 @@ class BagWriter:
     """
 
     def __init__(self, path: str | Path) -> None:
-        from rosbags.rosbag2 import StoragePlugin, WriterError
-
         self.path = Path(path)
         try:
-            self._writer = _writer_class()(self.path, version=BAG_VERSION,
+            self._writer = _Writer(self.path, version=BAG_VERSION,
                                            storage_plugin=StoragePlugin.MCAP)
         except WriterError as exc:
             raise BagError(f"cannot create bag {str(self.path)!r}: {exc}") from None
@@ -287,9 +284,6 @@ class BagWriter:
             if topic not in interface.TOPIC_TYPES:
                 raise BagError(f"topic {topic!r}: unknown type; pass msgtype")
             msgtype = interface.TOPIC_TYPES[topic]
-        from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
-                                        QosReliability, QosTime)
-
         latched = topic in interface.LATCHED_TOPICS
         durability = QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE
         qos = Qos(QosHistory.KEEP_LAST, 1 if latched else 10, QosReliability.RELIABLE,
@@ -409,10 +403,6 @@ def scan_mcap(file: Path) -> McapScan:
     """Read an MCAP file record by record with CRC validation, up to its end or its first
     damage (a killed writer's unfinished chunk, a changed byte); messages of a damaged chunk
     are never returned."""
-    from mcap.exceptions import McapError
-    from mcap.records import Channel, DataEnd, Footer, Message, Metadata, Schema
-    from mcap.stream_reader import StreamReader
-
     scan = McapScan()
     schema_names: dict[int, str] = {}
     channels: dict[int, tuple[str, str]] = {}
@@ -440,8 +430,6 @@ def scan_mcap(file: Path) -> McapScan:
     except (McapError, OSError, EOFError, ValueError, KeyError, IndexError, OverflowError,
             UnicodeDecodeError, MemoryError, struct.error, zlib.error, AssertionError,
             TypeError) as exc:  # what the MCAP reader raises on a damaged file
-        from mcap.stream_reader import CRCValidationError
-
         if isinstance(exc, CRCValidationError):
             scan.damage = f"checksum (CRC) mismatch, the data changed after writing: {exc}"
         else:
@@ -458,8 +446,6 @@ def read_metadata(path: str | Path) -> dict[str, Any] | None:
     BagError
         ``metadata.yaml`` exists but is not a rosbag2 metadata file.
     """
-    import yaml
-
     meta = Path(path) / "metadata.yaml"
     if not Path(path).is_dir() or not meta.is_file():
         return None
@@ -540,8 +526,6 @@ def read_bag(path: str | Path) -> tuple[list[RawMessage], BagCheck]:
     BagError
         The bag does not exist or is not a bag.
     """
-    from fourws_run.accounting import RunAccount
-
     files = mcap_files(path)
     problems: list[str] = []
     messages: list[RawMessage] = []
@@ -621,8 +605,6 @@ def repair_bag(path: str | Path) -> RepairResult:
     BagError
         Not a bag directory, nothing recoverable, or the new files cannot be written.
     """
-    from fourws_run.accounting import account_from_messages
-
     path = Path(path)
     files = mcap_files(path)
     if not path.is_dir() or len(files) != 1:
@@ -636,7 +618,7 @@ def repair_bag(path: str | Path) -> RepairResult:
     unknown = sorted({m.msgtype for m in scan.messages if m.msgtype not in store.types})
     if unknown:
         raise BagError(f"bag {str(path)!r}: unknown message types {', '.join(unknown)}")
-    account = account_from_messages(scan.messages)
+    account = account_from_messages(scan.messages, bag_typestore(scan.schemas))
     tmp_dir = path.parent / f".{path.name}.repair-{os.getpid()}-{int(time.time())}"
     try:
         writer = BagWriter(tmp_dir).open()

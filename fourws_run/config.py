@@ -22,7 +22,11 @@ loads.
 from __future__ import annotations
 
 import dataclasses
+import platform
+import re
+import shlex
 from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
 from typing import Any, Mapping
 
 from fourws_run import interface
@@ -72,8 +76,6 @@ class ControllerSpec:
         ParameterError
             Unknown key, an empty or non-string command, a bad ROS node name.
         """
-        import shlex
-
         if data is None:
             return cls()
         if not isinstance(data, Mapping):
@@ -104,8 +106,6 @@ def check_node_name(name: Any, field_name: str, source: str | None = None) -> st
     ParameterError
         Otherwise.
     """
-    import re
-
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,254}", name):
         raise ParameterError(field_name, f"must be a ROS node name (letters, digits, _), got "
                              f"{name!r}", source)
@@ -184,36 +184,10 @@ class RunConfig:
     @classmethod
     def from_scenario(cls, scenario: Any, law: str,
                       controller: ControllerSpec | None = None) -> "RunConfig":
-        """The run of ``scenario`` (a :class:`fourws_run.scenario.Scenario`) with ``law``
-        (or ``controller``, the user's). A step steer to a target lateral acceleration gets the
-        amplitude that reaches it with this law
-        (:func:`fourws_run.closed_loop.scenario_for_law`).
-
-        Raises
-        ------
-        ParameterError
-            The step target cannot be reached with the law.
-        """
-        from fourws_run.closed_loop import scenario_for_law  # the twin imports this module
-
-        ctrl = controller if controller is not None else scenario.controller
-        if ctrl.builtin:
-            scenario = scenario_for_law(scenario, law)
-        vehicle = scenario.build_vehicle()
-        rec = scenario.recording
-        recorded: tuple[str, ...] = ()
-        if rec.enabled:
-            recorded = (interface.RECORDED_TOPICS if rec.topics == "all"
-                        else tuple(rec.topics))
-        return cls(vehicle=vehicle, belief=scenario.build_belief(vehicle),
-                   maneuver=scenario.maneuver, law=law,
-                   law_options=dict(scenario.law_options.get(law, {})),
-                   model=scenario.model, tire=scenario.tire, integrator=scenario.integrator,
-                   integration_step_s=scenario.integration_step_s,
-                   control_period_s=scenario.control_period_s,
-                   state_period_s=scenario.state_period_s, clock_mode=scenario.clock_mode,
-                   controller=ctrl, scenario=scenario.name, recorded_topics=recorded,
-                   versions=software_versions())
+        """The run of ``scenario`` with ``law`` (or ``controller``, the user's): what
+        :meth:`fourws_run.scenario.Scenario.run_config` builds (a step steer to a target
+        lateral acceleration is resolved for the law there)."""
+        return scenario.run_config(law, controller)
 
     # ------------------------------------------------------------------ serializing
     def to_dict(self) -> dict[str, Any]:
@@ -329,9 +303,6 @@ class RunConfig:
 
 def software_versions() -> dict[str, str]:
     """Versions of the software a run uses (Python, fourws, the ROS client, numpy, rosbags)."""
-    import platform
-    from importlib.metadata import PackageNotFoundError, version
-
     versions: dict[str, str] = {"python": platform.python_version()}
     for dist in ("fourws", "rosbags", "numpy", "ros-rclpy"):
         try:

@@ -43,7 +43,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from fourws_control.registry import LAWS
-from fourws_run.config import ControllerSpec
+from fourws_run import interface
+from fourws_run.config import ControllerSpec, RunConfig, software_versions
+from fourws_run.step_target import scenario_for_law
 from fourws_run.ticks import whole_multiple
 from fourws_sim.errors import ParameterError, UnknownNameError
 from fourws_sim.integrators import INTEGRATORS
@@ -124,6 +126,37 @@ class Scenario:
         answers every published state, in lockstep once per control period and in realtime
         once per state period. The law is built for this period."""
         return self.control_period_s if self.clock_mode == "lockstep" else self.state_period_s
+
+    def run_config(self, law: str, controller: ControllerSpec | None = None) -> RunConfig:
+        """The run of this scenario with ``law`` (or ``controller``, the user's), as the graph
+        and the offline twin both run it. A step steer to a target lateral acceleration gets
+        the amplitude that reaches it with this law
+        (:func:`fourws_run.step_target.scenario_for_law`).
+
+        Raises
+        ------
+        ParameterError
+            The step target cannot be reached with the law.
+        """
+        ctrl = controller if controller is not None else self.controller
+        scenario = scenario_for_law(self, law) if ctrl.builtin else self
+        vehicle = scenario.build_vehicle()
+        rec = scenario.recording
+        recorded: tuple[str, ...] = ()
+        if rec.enabled:
+            recorded = (interface.RECORDED_TOPICS if rec.topics == "all"
+                        else tuple(rec.topics))
+        return RunConfig(vehicle=vehicle, belief=scenario.build_belief(vehicle),
+                         maneuver=scenario.maneuver, law=law,
+                         law_options=dict(scenario.law_options.get(law, {})),
+                         model=scenario.model, tire=scenario.tire,
+                         integrator=scenario.integrator,
+                         integration_step_s=scenario.integration_step_s,
+                         control_period_s=scenario.control_period_s,
+                         state_period_s=scenario.state_period_s,
+                         clock_mode=scenario.clock_mode, controller=ctrl,
+                         scenario=scenario.name, recorded_topics=recorded,
+                         versions=software_versions())
 
     @property
     def control_steps(self) -> int:

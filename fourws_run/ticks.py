@@ -36,10 +36,12 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from fourws_control import LawInput
 from fourws_run import interface
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import DivergedError, ParameterError
 from fourws_sim.params import GRAVITY_MPS2, Vehicle
+from fourws_sim.simulator import Inputs
 
 #: Relative tolerance of "a period is a whole multiple of the integration step".
 MULTIPLE_RTOL = 1e-9
@@ -97,8 +99,6 @@ class Tick:
 def simulator_inputs(command: DriverCommand, rear_angle_rad: float) -> Any:
     """The :class:`fourws_sim.simulator.Inputs` of a driver command and a rear road-wheel
     angle (rad, after the actuator); the simulator maps them to its model's input order."""
-    from fourws_sim.simulator import Inputs
-
     return Inputs(front_wheel_angle_rad=command.front_wheel_angle_rad,
                   rear_wheel_angle_rad=rear_angle_rad,
                   steering_torque_nm=command.steering_torque_nm,
@@ -114,8 +114,6 @@ def law_input(outputs: Mapping[str, Any], front_wheel_angle_rad: float) -> Any:
     The one place a law input is built: the controller node and the offline twin both call it,
     so they hand the law the same Python floats.
     """
-    from fourws_control import LawInput
-
     return LawInput(delta_f_rad=float(front_wheel_angle_rad),
                     speed_mps=float(outputs["speed_mps"]),
                     yaw_rate_radps=float(outputs["yaw_rate_radps"]),

@@ -105,7 +105,7 @@ class StepSteerParams(_RampAndHold):
     steer, so the laws reach different lateral accelerations. ISO 7401 compares at one steady
     lateral acceleration instead (4 m/s^2 is customary): set ``target_lateral_accel_mps2``
     and the amplitude is found for each law before its run
-    (:func:`fourws_run.closed_loop.resolve_maneuver_for_law`, with the offline twin of the
+    (:func:`fourws_run.step_target.resolve_maneuver_for_law`, with the offline twin of the
     run); ``amplitude_rad`` then only gives the direction (its sign) and the first guess, and
     may be left out (a left turn). A resolved maneuver holds the amplitude found, the law it
     was found for (``amplitude_law``) and the steady lateral acceleration the twin reached
@@ -645,7 +645,7 @@ class Maneuver:
             raise ParameterError(
                 "target_lateral_accel_mps2", "the step amplitude for this target is found per "
                 "law before a run (fourws run and run_scenario do it, see "
-                "fourws_run.closed_loop.resolve_maneuver_for_law); this maneuver was not "
+                "fourws_run.step_target.resolve_maneuver_for_law); this maneuver was not "
                 "resolved", spec.source or spec.name)
         if spec.type == "constant_radius":
             direction = 1 if p.direction == "left" else -1

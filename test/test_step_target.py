@@ -1,4 +1,4 @@
-"""ISO 7401 step at a target steady lateral acceleration (fourws_run.closed_loop:
+"""ISO 7401 step at a target steady lateral acceleration (fourws_run.step_target:
 find_step_amplitude, resolve_maneuver_for_law, scenario_for_law, run_scenario).
 
 Sources: the target itself, measured on the resolved run by the ISO 7401 analysis (an
@@ -16,8 +16,9 @@ import pytest
 
 from fourws_analysis import frequency as F
 from fourws_analysis import iso7401
-from fourws_run.closed_loop import (TARGET_ACCEL_RTOL, find_step_amplitude,
-                                    resolve_maneuver_for_law, run_scenario, scenario_for_law)
+from fourws_run.closed_loop import run_scenario
+from fourws_run.step_target import (TARGET_ACCEL_RTOL, find_step_amplitude,
+                                    resolve_maneuver_for_law, scenario_for_law)
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import load_maneuver_spec, make_maneuver, maneuver_spec_from_mapping
 from fourws_sim.params import load_vehicle
