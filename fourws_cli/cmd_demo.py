@@ -50,8 +50,9 @@ def run(args: argparse.Namespace) -> int:
         print("fourws demo: no run succeeded: " + "; ".join(failed))
         return 1
     report_dir = out / "report"
-    analyze_args = argparse.Namespace(bags=bags, report=str(report_dir), json=False, dt=None,
-                                      no_sweep=False, timing=True, quiet=False)
+    parser = argparse.ArgumentParser()
+    cmd_analyze.add_arguments(parser)  # the analyze command's own options and defaults
+    analyze_args = parser.parse_args([*bags, "--report", str(report_dir), "--timing"])
     code = cmd_analyze.run(analyze_args)
     print("fourws demo: bags:")
     for bag in bags:
