@@ -45,9 +45,16 @@ from fourws_run.interface import RUN_CONFIG as TOPIC_RUN_CONFIG
 from fourws_run.interface import SIM_STATUS as TOPIC_SIM_STATUS
 from fourws_run.interface import STATE as TOPIC_STATE
 from fourws_run.interface import TOPIC_TYPES
-from fourws_sim.errors import FourwsError
+from fourws_sim.errors import FourwsError, ParameterError
 
 _NS_PER_S = interface.NS_PER_S
+#: Bounds of the resampling step of :func:`resample`: at most this many samples per recorded
+#: state period (finer interpolation adds nothing but memory: a 1 ns step on a 20 s run asks
+#: for 149 GiB) ...
+MAX_UPSAMPLING = 100.0
+#: ... and at least this many samples over the run (a step as long as the run leaves one
+#: sample, which no metric can use).
+MIN_RESAMPLED_POINTS = 16
 _CDR_HEADER_BYTES = 4  # encapsulation kind + options precede the CDR payload
 
 
@@ -383,6 +390,8 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
         types[m.topic] = m.msgtype
     start = min((t[0] for t in recv_by_topic.values()), default=0)
 
+    from rosbags.serde import SerdeError  # lazy, as every rosbags import here
+
     config: dict[str, Any] = {}
     result = RunData(path=str(path), config=config, warnings=warnings,
                      complete=check.complete, problems=list(check.problems))
@@ -390,7 +399,7 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
         msgtype = types[topic]
         try:
             fields = _decode(msgtype, raws, store)
-        except (ValueError, IndexError, KeyError, UnicodeDecodeError) as exc:
+        except (ValueError, IndexError, KeyError, UnicodeDecodeError, SerdeError) as exc:
             raise BagError(f"bag {str(path)!r}: cannot decode {topic} ({msgtype}): {exc}") \
                 from None
         if "header.stamp.sec" in fields:
@@ -503,12 +512,16 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
     ----------
     run : RunData
     dt_s : float, optional
-        Grid step in s; default the median spacing of the state stamps.
+        Grid step in s; default the median spacing of the state stamps. At least
+        1/:data:`MAX_UPSAMPLING` of that spacing and at most the span of the record over
+        ``MIN_RESAMPLED_POINTS - 1``.
 
     Raises
     ------
     BagError
-        If the bag has fewer than two state messages.
+        If the bag has fewer than two state messages or its stamps do not advance.
+    ParameterError
+        If ``dt_s`` is outside its bounds (field ``dt_s``, the bag named).
     """
     state = run.require(TOPIC_STATE)
     t_raw = state.time_s
@@ -516,11 +529,20 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
         raise BagError(f"bag {run.path!r}: {TOPIC_STATE} has {t_raw.size} message(s); "
                        "need at least 2")
     order_t, _ = _monotonic(t_raw, t_raw)
-    if dt_s is None:
-        dt_s = float(np.median(np.diff(order_t)))
-    if not (math.isfinite(dt_s) and dt_s > 0.0):
+    recorded_dt_s = float(np.median(np.diff(order_t)))
+    if not (math.isfinite(recorded_dt_s) and recorded_dt_s > 0.0):
         raise BagError(f"bag {run.path!r}: {TOPIC_STATE} stamps do not advance")
-    n = int(math.floor((order_t[-1] - order_t[0]) / dt_s + 1e-9)) + 1
+    span_s = float(order_t[-1] - order_t[0])
+    if dt_s is None:
+        dt_s = recorded_dt_s
+    low, high = recorded_dt_s / MAX_UPSAMPLING, span_s / (MIN_RESAMPLED_POINTS - 1)
+    if not (isinstance(dt_s, (int, float)) and math.isfinite(dt_s) and low <= dt_s <= high):
+        raise ParameterError("dt_s", f"resampling step {dt_s!r} s is outside [{low:.3g}, "
+                             f"{high:.3g}] s for this bag (state period {recorded_dt_s:.3g} s "
+                             f"over {span_s:.3g} s: at most {MAX_UPSAMPLING:g} samples per "
+                             f"recorded state, at least {MIN_RESAMPLED_POINTS} samples)",
+                             run.path)
+    n = int(math.floor(span_s / dt_s + 1e-9)) + 1
     grid = order_t[0] + dt_s * np.arange(n)
     channels: dict[str, np.ndarray] = {}
     for name in STATE_CHANNELS:

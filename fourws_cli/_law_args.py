@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from fourws_cli._bounds import BELIEF_SCALE, bounded
 from fourws_control import Law, available_laws, make_law
 from fourws_sim.errors import ParameterError
 from fourws_sim.params import Vehicle
@@ -45,8 +46,6 @@ def build_law(args: argparse.Namespace, vehicle: Vehicle) -> Law:
     """The law of the parsed arguments, designed on the (possibly scaled) belief vehicle."""
     belief = vehicle
     if args.belief_tire_scale is not None:
-        scale = args.belief_tire_scale
-        if not scale > 0.0:
-            raise ParameterError("--belief-tire-scale", f"must be > 0, got {scale!r}")
+        scale = bounded("--belief-tire-scale", args.belief_tire_scale, *BELIEF_SCALE)
         belief = vehicle.with_axle_tires(scale)
     return make_law(args.law, belief, **law_options(args.law_option))

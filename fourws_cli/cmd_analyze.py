@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from typing import Any
 
-from fourws_sim.errors import FourwsError
+from fourws_sim.errors import FourwsError, ParameterError, one_line
 
 HELP = "analyse recorded runs (rosbag2 MCAP): frequency response, ISO 7401/4138, stability"
 
@@ -62,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
     from fourws_analysis.compare import analyze_run
     from fourws_analysis.report import write_report
 
+    if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0.0):
+        raise ParameterError("--dt", f"must be a finite number of seconds > 0, got {args.dt!r}")
     start = time.perf_counter()
     steps_per_bag = 7
     bar = ProgressBar(len(args.bags) * steps_per_bag + (6 if args.report else 0),
@@ -74,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
             run_data = bagmod.load_bag(path, allow_incomplete=args.allow_incomplete)
             uniform = bagmod.resample(run_data, args.dt)
         except FourwsError as exc:
-            failures[path] = str(exc)
+            failures[path] = one_line(exc)
             continue
         base, k = uniform.name, 2
         while uniform.name in {a.name for a in analyses}:  # labels key the metrics
@@ -90,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
         index = write_report(analyses, args.report, failures, progress=bar)
     bar.close()
     elapsed = time.perf_counter() - start
-    for path, why in failures.items():
+    for path, why in failures.items() if analyses else ():
+        # (with no bag analysed the command's one error line below names every reason)
         print(f"fourws analyze: error: {why}", file=sys.stderr)
     for r in analyses:
         for metric, why in r.unavailable.items():

@@ -21,14 +21,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark and print its results."""
+    from fourws_cli._bounds import bounded
     from fourws_sim.bench import format_text, run_benchmark, to_json
-    from fourws_sim.errors import ParameterError
+    from fourws_sim.maneuvers import MAX_DURATION_S
 
-    if not args.seconds > 0.0:
-        raise ParameterError("--seconds", f"must be > 0, got {args.seconds}")
-    if args.repeats < 1:
-        raise ParameterError("--repeats", f"must be >= 1, got {args.repeats}")
-    result = run_benchmark(vehicle=args.vehicle, sim_seconds=args.seconds,
+    seconds = bounded("--seconds", args.seconds, 0.0, MAX_DURATION_S, " s", low_open=True)
+    bounded("--repeats", args.repeats, 1, 1000)
+    result = run_benchmark(vehicle=args.vehicle, sim_seconds=seconds,
                            repeats=args.repeats, tire=args.tire, cold=not args.no_cold)
     print(to_json(result) if args.json else format_text(result))
     return 0

@@ -75,10 +75,16 @@ def _overrun_times(bag_path) -> list[float]:
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark; returns the exit code."""
     from fourws_analysis.bag import load_bag
+    from fourws_cli._bounds import bounded
     from fourws_ros import topics
     from fourws_ros.graph_run import run_graph
     from fourws_run.config import RunConfig
+    from fourws_sim.maneuvers import MAX_DURATION_S
 
+    bounded("--lockstep-seconds", args.lockstep_seconds, 0.0, MAX_DURATION_S, " s",
+            low_open=True)
+    bounded("--realtime-seconds", args.realtime_seconds, 0.0, MAX_DURATION_S, " s")
+    bounded("--state-rate-hz", args.state_rate_hz, 1.0, 1e4, " Hz")
     out = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="fourws-bench-"))
     quiet = (lambda _text: None) if args.json else None
     result: dict[str, object] = {"load_average_before": os.getloadavg()[0]}

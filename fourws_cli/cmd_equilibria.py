@@ -17,6 +17,7 @@ import argparse
 import json
 import math
 
+from fourws_cli._bounds import speed_mps
 from fourws_sim.params import load_vehicle
 
 HELP = "equilibria and stability region of the nonlinear cubic-tire 2-DOF model (ch. 7)"
@@ -46,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from fourws_analysis import nonlinear2dof
     from fourws_sim.models import check_speed
 
-    speed = check_speed(args.speed_mps, "--speed-mps")
+    speed = speed_mps("--speed-mps", check_speed(args.speed_mps, "--speed-mps"))
     vehicle = load_vehicle(args.vehicle)
     eqs = nonlinear2dof.equilibria(vehicle, speed)
     out: dict = {"vehicle": vehicle.name, "speed_mps": speed,

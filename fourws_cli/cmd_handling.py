@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from fourws_cli._bounds import speed_mps
 from fourws_cli._law_args import add_law_arguments, build_law
 from fourws_sim.params import load_vehicle
 
@@ -39,9 +40,10 @@ def run(args: argparse.Namespace) -> int:
     """Run the handling analysis and print it; returns the exit code."""
     from fourws_analysis.handling import handling_report
 
+    speeds = [speed_mps("--speeds-mps", v) for v in args.speeds_mps]
     vehicle = load_vehicle(args.vehicle)
     law = build_law(args, vehicle)
-    out = handling_report(vehicle, law, args.speeds_mps).to_dict()
+    out = handling_report(vehicle, law, speeds).to_dict()
     if args.json:
         print(json.dumps(out, indent=2))
         return 0

@@ -22,13 +22,13 @@ from __future__ import annotations
 import argparse
 import json
 
+from fourws_cli._bounds import KMH_PER_MPS, speed_kmh, speed_mps
 from fourws_cli._law_args import add_law_arguments, build_law
 from fourws_sim.errors import ParameterError
 from fourws_sim.params import load_vehicle
 
 HELP = "eigenvalues, damping, Routh-Hurwitz and steady-state gains of a linear model with a law"
 MODELS = ("2dof", "2dof-free", "2dof-lagged", "3dof")
-KMH_PER_MPS = 3.6
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -62,14 +62,15 @@ def run(args: argparse.Namespace) -> int:
     """Run the analysis and print it; returns the exit code."""
     from fourws_analysis import linear
 
-    if not args.speed_kmh > 0.0:
-        raise ParameterError("--speed-kmh", f"must be > 0, got {args.speed_kmh!r}")
+    speed = speed_kmh("--speed-kmh", args.speed_kmh) / KMH_PER_MPS
+    low, high = (speed_mps("--speed-range-mps", v) for v in args.speed_range_mps)
+    if not low < high:
+        raise ParameterError("--speed-range-mps", f"LO must be below HI, got {low!r} {high!r}")
     vehicle = load_vehicle(args.vehicle)
     law = build_law(args, vehicle)
-    speed = args.speed_kmh / KMH_PER_MPS
     report = linear.linear_report(args.model, vehicle, law, speed,
                                   with_critical_speed=args.critical_speed,
-                                  speed_range_mps=tuple(args.speed_range_mps))
+                                  speed_range_mps=(low, high))
     out = report.to_dict()
     if args.transfer_functions or args.bode or args.bode_plot:
         cl = linear.closed_loop(args.model, vehicle, law, speed)

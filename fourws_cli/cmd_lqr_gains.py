@@ -17,6 +17,8 @@ import json
 from fourws_sim.params import load_vehicle
 
 HELP = "LQR rear-steer gains versus speed and weight q (JSON, table or plot)"
+#: Largest LQR weight accepted on the command line.
+MAX_WEIGHT = 1e8
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -45,11 +47,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Compute the sweep and print/plot it; returns the exit code."""
     from fourws_analysis.lqr_analysis import lqr_sweep, plot_lqr_gains
+    from fourws_cli._bounds import speed_mps
     from fourws_control.lqr import LqrWeights
+    from fourws_sim.errors import ParameterError
 
+    speeds = [speed_mps("--speeds", u) for u in args.speeds]
+    # LQR weights (their signs are checked by LqrWeights and lqr_sweep): only their ratios
+    # matter, and beyond MAX_WEIGHT the Riccati equation is ill-conditioned
+    for option in ("--q", "--p", "--q-steer", "--q-yaw", "--q-roll", "--q-roll-rate"):
+        value = getattr(args, option[2:].replace("-", "_"))
+        for v in value if isinstance(value, list) else [value]:
+            if abs(v) > MAX_WEIGHT:
+                raise ParameterError(option, f"must be at most {MAX_WEIGHT:g}, got {v!r}")
     vehicle = load_vehicle(args.vehicle)
     weights = LqrWeights(1.0, args.q_steer, args.q_yaw, args.q_roll, args.q_roll_rate, args.p)
-    sweep = lqr_sweep(args.model, vehicle, args.speeds, args.q, weights)
+    sweep = lqr_sweep(args.model, vehicle, speeds, args.q, weights)
     if args.json:
         print(json.dumps(sweep.to_dict(), indent=2))
         return 0

@@ -25,9 +25,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Replay the bag; returns the node's exit code."""
+    from fourws_cli._bounds import bounded
     from fourws_ros.replay_node import main
     from fourws_sim.errors import ParameterError
 
+    bounded("--rate", args.rate, 0.0, 1000.0, low_open=True)
     if not args.bag.is_dir():
         raise ParameterError("bag", f"no bag directory {str(args.bag)!r}")
     ros_args = ["fourws_replay", "--ros-args", "-p", f"bag_path:={args.bag}",

@@ -44,6 +44,10 @@ def run(args: argparse.Namespace) -> int:
     from fourws_analysis.tire_curves import plot_tire_curves, tire_curves
     from fourws_sim.tires import cornering_stiffness, get_tire
 
+    from fourws_cli._bounds import bounded
+
+    if args.fz_n is not None:
+        bounded("--fz-n", args.fz_n, 0.0, 1e6, " N", low_open=True)
     vehicle = load_vehicle(args.vehicle)
     curves = tire_curves(vehicle, axle=args.axle, fz_n=args.fz_n, tire_model=args.tire)
     coeffs = get_tire(curves.tire_model).pack(vehicle, args.axle)

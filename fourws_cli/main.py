@@ -7,7 +7,9 @@ Each subcommand is a module ``fourws_cli/cmd_<name>.py`` exposing::
     def run(args) -> int                        # exit code
 
 Modules are discovered by name, so adding a subcommand is adding one file. User errors
-(:class:`fourws_sim.errors.FourwsError`) become one line on stderr and exit code 2.
+(:class:`fourws_sim.errors.FourwsError`) and files that cannot be read or written
+(:class:`OSError`: a missing or read-only folder, a full disk) become one line
+``fourws COMMAND: error: ...`` on stderr and exit code 2, never a traceback.
 """
 
 from __future__ import annotations
@@ -18,7 +20,10 @@ import pkgutil
 import sys
 
 import fourws_cli
-from fourws_sim.errors import FourwsError
+from fourws_sim.errors import FourwsError, one_line
+
+#: Exit code of a user error: bad input, or an output that cannot be written.
+EXIT_USER_ERROR = 2
 
 
 def _commands() -> dict[str, object]:
@@ -57,11 +62,33 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args._run(args) or 0)
     except FourwsError as exc:
-        print(f"fourws {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        print(f"fourws {args.command}: error: {one_line(exc)}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except OSError as exc:
+        # an --out/--report/plot path that cannot be written (missing or read-only folder, a
+        # full disk) or an input that cannot be read; the message names the path
+        print(f"fourws {args.command}: error: {_os_error(exc, args)}", file=sys.stderr)
+        return EXIT_USER_ERROR
     except KeyboardInterrupt:
         print(f"fourws {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+#: Options of the subcommands that name a file or folder to write.
+_OUTPUT_OPTIONS = ("out", "report", "bode_plot", "region", "plot", "png", "keep")
+
+
+def _os_error(exc: OSError, args: argparse.Namespace) -> str:
+    """One line for an OSError: its path first (as in the package errors) and the reason; an
+    error raised while writing an already open file (a full disk) carries no path, so the
+    output options given are named instead."""
+    names = [repr(str(n)) for n in (exc.filename, exc.filename2) if n is not None]
+    what = exc.strerror or one_line(exc)
+    if names:
+        return f"{' -> '.join(names)}: {what}"
+    given = [f"--{k.replace('_', '-')} {str(getattr(args, k))!r}" for k in _OUTPUT_OPTIONS
+             if getattr(args, k, None) is not None]
+    return f"{what} (writing {', '.join(given)})" if given else what
 
 
 if __name__ == "__main__":

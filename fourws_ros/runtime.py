@@ -3,8 +3,10 @@
 A node process ends in one of four ways, with a distinct exit code the launcher reports:
 
 * :data:`EXIT_OK` (0) — SIGINT/SIGTERM or the node asked to stop (``node.finished``);
-* :data:`EXIT_USER_ERROR` (2) — a :class:`fourws_sim.errors.FourwsError` at start-up (bad
-  parameter, unknown name, malformed YAML); its message, which names the field, is logged;
+* :data:`EXIT_USER_ERROR` (2) — a bad start-up input: a :class:`fourws_sim.errors.FourwsError`
+  (bad parameter, unknown name, malformed YAML), a parameter rclpy refuses (type, range,
+  name), or arguments rcl cannot take (a missing, binary or malformed ``--params-file``); its
+  message, on one line that names the field or file, goes to stderr;
 * :data:`EXIT_RUN_STOPPED` (3) — the node stopped the run for a reason of the simulation
   (non-finite state, ...), given in ``node.stop_reason``;
 * :data:`EXIT_INCOMPLETE` (4) — the recorder closed a bag that does not hold every message
@@ -18,9 +20,12 @@ the context shuts down.
 
 from __future__ import annotations
 
+import re
 import signal
 import sys
 from typing import Any, Callable, Sequence
+
+from fourws_sim.errors import one_line
 
 EXIT_OK = 0
 EXIT_CRASH = 1
@@ -41,6 +46,12 @@ class _StopFlag:
 
     def __call__(self, signum: int, _frame: Any) -> None:
         self.signal = signum
+
+
+def _rcl_message(exc: BaseException) -> str:
+    """An rcl error on one line, without the C source locations rcl appends
+    (``..., at ./src/parser.c:263``)."""
+    return re.sub(r",? at \S+:\d+", "", one_line(exc)).strip() or type(exc).__name__
 
 
 def make_executor(context: Any = None, message_info: bool = False) -> Any:
@@ -89,23 +100,36 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     from rclpy.signals import SignalHandlerOptions
     from rclpy.task import Future
 
-    from rclpy.exceptions import ParameterException
+    from rclpy.exceptions import NameValidationException, ParameterException
+    from rclpy.impl.implementation_singleton import rclpy_implementation
 
     from fourws_sim.errors import FourwsError
 
+    rcl_error = rclpy_implementation.RCLError
     flag = _StopFlag()
     signal.signal(signal.SIGINT, flag)
     signal.signal(signal.SIGTERM, flag)
-    rclpy.init(args=list(args) if args is not None else sys.argv,
-               signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        rclpy.init(args=list(args) if args is not None else sys.argv,
+                   signal_handler_options=SignalHandlerOptions.NO)
+    except rcl_error as exc:
+        # rcl refuses the arguments: a --params-file that is missing, not YAML or not a
+        # parameter file, a malformed -p or remapping
+        print(f"[{name}] error: cannot start: {_rcl_message(exc)}", file=sys.stderr, flush=True)
+        return EXIT_USER_ERROR
     node = None
     code = EXIT_OK
     try:
         try:
             node = factory()
-        except (FourwsError, ParameterException) as exc:
-            # ParameterException: a --ros-args/-p value outside its descriptor's range or type
-            print(f"[{name}] error: {exc}", file=sys.stderr, flush=True)
+        except (FourwsError, ParameterException, NameValidationException) as exc:
+            # ParameterException: a --ros-args/-p or --params-file value of the wrong type or
+            # outside its descriptor's range
+            print(f"[{name}] error: {one_line(exc)}", file=sys.stderr, flush=True)
+            return EXIT_USER_ERROR
+        except rcl_error as exc:
+            print(f"[{name}] error: cannot start: {_rcl_message(exc)}", file=sys.stderr,
+                  flush=True)
             return EXIT_USER_ERROR
         executor = make_executor(message_info=getattr(node, "needs_message_info", False))
         executor.add_node(node)

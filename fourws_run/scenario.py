@@ -47,16 +47,32 @@ from fourws_run import interface
 from fourws_run.config import ControllerSpec, RunConfig, software_versions
 from fourws_run.step_target import scenario_for_law
 from fourws_run.ticks import whole_multiple
-from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.errors import ParameterError, UnknownNameError, describe
 from fourws_sim.integrators import INTEGRATORS
-from fourws_sim.maneuvers import ManeuverSpec, load_maneuver_spec, maneuver_spec_from_mapping
+from fourws_sim.maneuvers import (ManeuverSpec, check_sampling, load_maneuver_spec,
+                                  maneuver_spec_from_mapping)
 from fourws_sim.models import MODELS
-from fourws_sim.params import (CONFIG_DIR, Tire, Vehicle, available_configs, load_vehicle,
-                               read_yaml, resolve_config_path)
+from fourws_sim.params import (CONFIG_DIR, UNCHECKED_KEY, Tire, Vehicle, available_configs,
+                               check_plausible, load_vehicle, read_yaml, resolve_config_path,
+                               unchecked_fields_from)
 from fourws_sim.tires import TIRES
 
 SCENARIO_DIR = CONFIG_DIR / "scenarios"
 CLOCK_MODES = ("lockstep", "realtime")
+#: Plausibility bounds of a scenario's numbers (docs/architecture.md, "Parameters"; the file
+#: may lift one with ``unchecked_fields``). Periods in s, scales dimensionless (the belief
+#: range is the controller node's parameter range).
+_BOUNDS = {
+    "integration_step_s": (1e-5, 0.05),
+    "control_period_s": (1e-4, 1.0),
+    "state_period_s": (1e-4, 1.0),
+    "belief.cornering_stiffness_scale_front": (0.05, 20.0),
+    "belief.cornering_stiffness_scale_rear": (0.05, 20.0),
+}
+#: Hard limits on what one run may cost (never lifted): integration steps and recorded
+#: states (``duration_s`` over the step and the state period).
+MAX_RUN_STEPS = 100_000_000
+MAX_RUN_STATES = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -107,6 +123,7 @@ class Scenario:
     controller: ControllerSpec = field(default_factory=ControllerSpec)
     description: str = ""
     source: str = field(default="", compare=False)
+    unchecked_fields: frozenset[str] = frozenset()
 
     def build_vehicle(self) -> Vehicle:
         """The simulated vehicle, with the tire override applied."""
@@ -166,6 +183,7 @@ class Scenario:
     def to_dict(self) -> dict[str, Any]:
         """The file layout as a plain mapping, with the maneuver inline (for recording)."""
         rec = self.recording
+        extra = {UNCHECKED_KEY: sorted(self.unchecked_fields)} if self.unchecked_fields else {}
         return {
             "name": self.name, "description": self.description, "vehicle": self.vehicle,
             "maneuver": self.maneuver.to_dict(), "laws": list(self.laws),
@@ -179,21 +197,24 @@ class Scenario:
                           else list(rec.topics)},
             "controller": {"command": list(self.controller.command),
                            "name": self.controller.node_name},
+            **extra,
         }
 
 
 _FIELDS = ("name", "description", "vehicle", "maneuver", "laws", "law_options", "model", "tire",
            "integrator", "clock_mode", "integration_step_s", "control_period_s",
-           "state_period_s", "belief", "recording", "controller")
+           "state_period_s", "belief", "recording", "controller", UNCHECKED_KEY)
 
 
 def _number(data: Mapping[str, Any], key: str, default: float, source: str,
-            prefix: str = "") -> float:
+            prefix: str = "", unchecked: frozenset[str] = frozenset()) -> float:
     value = data.get(key, default)
     if isinstance(value, bool) or not isinstance(value, (int, float)) \
             or not math.isfinite(value) or value <= 0.0:
-        raise ParameterError(f"{prefix}{key}", f"must be a finite number > 0, got {value!r}",
-                             source)
+        raise ParameterError(f"{prefix}{key}",
+                             f"must be a finite number > 0, got {describe(value)}", source)
+    check_plausible(f"{prefix}{key}", float(value), _BOUNDS.get(f"{prefix}{key}"), source,
+                    unchecked)
     return float(value)
 
 
@@ -203,9 +224,24 @@ def _string(data: Mapping[str, Any], key: str, default: str | None, source: str,
     if value is None and allow_none:
         return None
     if not isinstance(value, str) or not value:
-        raise ParameterError(f"{prefix}{key}", f"must be a non-empty string, got {value!r}",
-                             source)
+        raise ParameterError(f"{prefix}{key}",
+                             f"must be a non-empty string, got {describe(value)}", source)
     return value
+
+
+def _named(loader: Any, name: str, key: str, source: str) -> Any:
+    """``loader(name)``; an unknown name or a missing file is reported as this scenario's
+    field ``key`` (errors inside the named file already name that file)."""
+    try:
+        return loader(name)
+    except UnknownNameError as exc:
+        if exc.source is not None:
+            raise
+        raise UnknownNameError(exc.kind, exc.name, exc.valid, f"{source} ({key})") from None
+    except ParameterError as exc:
+        if exc.source is not None:
+            raise
+        raise ParameterError(key, exc.problem, source) from None
 
 
 def _known_models() -> list[str]:
@@ -224,8 +260,9 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
         Unknown vehicle, maneuver, model, tire, integrator or law name.
     """
     if not isinstance(data, Mapping):
-        raise ParameterError("<root>", "scenario must be a mapping", source)
-    unknown = sorted(set(data) - set(_FIELDS))
+        raise ParameterError("<root>", f"scenario must be a mapping, got {describe(data)}",
+                             source)
+    unknown = sorted(str(k) for k in data if k not in _FIELDS)
     if unknown:
         raise ParameterError(unknown[0], f"unknown field (valid: {', '.join(sorted(_FIELDS))})",
                              source)
@@ -233,13 +270,18 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
         if key not in data:
             raise ParameterError(key, "missing required field", source)
     name = _string(data, "name", default_name, source)
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise ParameterError("description", f"must be a string, got {describe(description)}",
+                             source)
+    unchecked = unchecked_fields_from(data, set(_BOUNDS), source)
     vehicle = _string(data, "vehicle", None, source)
-    load_vehicle(vehicle)  # fail now on an unknown or malformed vehicle
+    _named(load_vehicle, vehicle, "vehicle", source)  # fail now on a bad vehicle
     maneuver_data = data["maneuver"]
     if isinstance(maneuver_data, Mapping):
         maneuver = maneuver_spec_from_mapping(maneuver_data, f"{source} (inline maneuver)")
     elif isinstance(maneuver_data, str) and maneuver_data:
-        maneuver = load_maneuver_spec(maneuver_data)
+        maneuver = _named(load_maneuver_spec, maneuver_data, "maneuver", source)
     else:
         raise ParameterError("maneuver", "must be a maneuver name, a path or a mapping", source)
 
@@ -248,12 +290,12 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
         laws_data = [laws_data]
     if not isinstance(laws_data, (list, tuple)) or not laws_data \
             or not all(isinstance(x, str) for x in laws_data):
-        raise ParameterError("laws", f"must be a non-empty list of law names, got {laws_data!r}",
-                             source)
+        raise ParameterError("laws", f"must be a non-empty list of law names, got "
+                                     f"{describe(laws_data)}", source)
     known_laws = list(LAWS)
     for law in laws_data:
         if law not in known_laws:
-            raise UnknownNameError("law", law, known_laws)
+            raise UnknownNameError("law", law, known_laws, source)
     law_options = data.get("law_options") or {}
     if not isinstance(law_options, Mapping) or not all(
             isinstance(v, Mapping) for v in law_options.values()):
@@ -268,22 +310,32 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
 
     model = _string(data, "model", "8dof", source)
     if model not in _known_models():
-        raise UnknownNameError("model", str(model), _known_models())
+        raise UnknownNameError("model", str(model), _known_models(), source)
     tire = _string(data, "tire", None, source, allow_none=True)
     if tire is not None and tire not in TIRES:
-        raise UnknownNameError("tire", tire, list(TIRES))
+        raise UnknownNameError("tire", tire, list(TIRES), source)
     integrator = _string(data, "integrator", "rk4", source)
     if integrator not in INTEGRATORS:
-        raise UnknownNameError("integrator", str(integrator), list(INTEGRATORS))
+        raise UnknownNameError("integrator", str(integrator), list(INTEGRATORS), source)
     clock = _string(data, "clock_mode", "lockstep", source)
     if clock not in CLOCK_MODES:
         raise ParameterError("clock_mode", f"must be one of {', '.join(CLOCK_MODES)}, "
-                             f"got {clock!r}", source)
-    step = _number(data, "integration_step_s", 1e-3, source)
-    control = _number(data, "control_period_s", 1e-2, source)
-    state = _number(data, "state_period_s", 1e-2, source)
+                             f"got {describe(clock)}", source)
+    step = _number(data, "integration_step_s", 1e-3, source, unchecked=unchecked)
+    control = _number(data, "control_period_s", 1e-2, source, unchecked=unchecked)
+    state = _number(data, "state_period_s", 1e-2, source, unchecked=unchecked)
     whole_multiple(control, step, "control_period_s", source)
     whole_multiple(state, step, "state_period_s", source)
+    # the driver samples its input once per answered state: each control period in
+    # lockstep, each state period in realtime (Scenario.controller_period_s)
+    check_sampling(maneuver, control if clock == "lockstep" else state, source)
+    for count, limit, what in ((maneuver.duration_s / step, MAX_RUN_STEPS,
+                                "integration steps (maneuver duration_s / integration_step_s)"),
+                               (maneuver.duration_s / state, MAX_RUN_STATES,
+                                "states (maneuver duration_s / state_period_s)")):
+        if count > limit:
+            raise ParameterError("maneuver.duration_s", f"the run would take {count:.3g} "
+                                 f"{what}, more than the limit {limit}", source)
 
     belief_data = data.get("belief") or {}
     if not isinstance(belief_data, Mapping):
@@ -295,13 +347,13 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
                              source)
     belief_vehicle = _string(belief_data, "vehicle", None, source, "belief.", allow_none=True)
     if belief_vehicle is not None:
-        load_vehicle(belief_vehicle)
+        _named(load_vehicle, belief_vehicle, "belief.vehicle", source)
     belief = BeliefSpec(
         vehicle=belief_vehicle,
         cornering_stiffness_scale_front=_number(belief_data, "cornering_stiffness_scale_front",
-                                                1.0, source, "belief."),
+                                                1.0, source, "belief.", unchecked),
         cornering_stiffness_scale_rear=_number(belief_data, "cornering_stiffness_scale_rear",
-                                               1.0, source, "belief."))
+                                               1.0, source, "belief.", unchecked))
 
     rec_data = data.get("recording") or {}
     if not isinstance(rec_data, Mapping):
@@ -318,9 +370,8 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     if topics != "all":
         if not isinstance(topics, (list, tuple)) or not topics or not all(
                 isinstance(t, str) and t.startswith("/") for t in topics):
-            raise ParameterError("recording.topics",
-                                 f"must be 'all' or a list of topic names, got {topics!r}",
-                                 source)
+            raise ParameterError("recording.topics", f"must be 'all' or a list of topic names, "
+                                                     f"got {describe(topics)}", source)
         topics = tuple(topics)
 
     controller = ControllerSpec.from_mapping(data.get("controller"), source)
@@ -330,7 +381,7 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
         integrator=str(integrator), clock_mode=str(clock), integration_step_s=step,
         control_period_s=control, state_period_s=state, belief=belief,
         recording=RecordingSpec(enabled, str(output_dir), topics), controller=controller,
-        description=str(data.get("description", "")), source=source)
+        description=description, source=source, unchecked_fields=unchecked)
 
 
 def available_scenarios() -> list[str]:

@@ -94,7 +94,8 @@ from typing import Any, Mapping, Protocol
 import numpy as np
 
 from fourws_sim.errors import ParameterError
-from fourws_sim.params import GRAVITY_MPS2, N_WHEELS, Vehicle, _from_mapping, _spec
+from fourws_sim.params import (GRAVITY_MPS2, MAX_SPEED_MPS, N_WHEELS, Vehicle, _from_mapping,
+                               _spec)
 
 _FRONT_WHEELS = (0, 1)
 _REAR_WHEELS = (2, 3)
@@ -150,14 +151,20 @@ class SpeedHoldSpec:
     """
 
     enabled: bool = True
-    kp_per_s: float = _spec("nonnegative", default=4.0, doc="accel per speed error, 1/s")
-    ki_per_s2: float = _spec("nonnegative", default=2.0, doc="accel per integrated error, 1/s^2")
+    kp_per_s: float = _spec("nonnegative", default=4.0, doc="accel per speed error, 1/s",
+                            bounds=(0.0, 100.0))
+    ki_per_s2: float = _spec("nonnegative", default=2.0, doc="accel per integrated error, 1/s^2",
+                             bounds=(0.0, 1e3))
     driven_axle: str = "rear"
-    brake_front_fraction: float = _spec("fraction", default=0.65, doc="front share of braking")
-    max_accel_mps2: float = _spec(default=3.0, doc="drive request limit, m/s^2")
-    max_decel_mps2: float = _spec(default=8.0, doc="brake request limit, m/s^2")
+    brake_front_fraction: float = _spec("fraction", default=0.65, doc="front share of braking",
+                                        bounds=(0.0, 1.0))
+    max_accel_mps2: float = _spec(default=3.0, doc="drive request limit, m/s^2",
+                                  bounds=(0.01, 20.0))
+    max_decel_mps2: float = _spec(default=8.0, doc="brake request limit, m/s^2",
+                                  bounds=(0.01, 20.0))
 
-    def _check(self, source: str | None, prefix: str) -> None:
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
         if not isinstance(self.enabled, bool):
             raise ParameterError(f"{prefix}enabled", "must be true or false", source)
         if self.driven_axle not in _DRIVEN:
@@ -364,13 +371,16 @@ class PathDriverSpec:
     road-wheel angle limit of 0.6 rad (a passenger car's lock).
     """
 
-    preview_time_s: float = _spec(default=0.8, doc="T_p, preview time")
-    min_preview_m: float = _spec(default=5.0, doc="L_min, minimum preview distance")
+    preview_time_s: float = _spec(default=0.8, doc="T_p, preview time", bounds=(0.01, 10.0))
+    min_preview_m: float = _spec(default=5.0, doc="L_min, minimum preview distance",
+                                 bounds=(0.01, 100.0))
     integral_gain_rad_per_ms: float = _spec("nonnegative", default=0.02,
-                                            doc="k_i, road-wheel rad per (m s) of path error")
+                                            doc="k_i, road-wheel rad per (m s) of path error",
+                                            bounds=(0.0, 10.0))
     yaw_rate_gain_s: float = _spec("nonnegative", default=0.0,
-                                   doc="k_r, road-wheel rad per rad/s of yaw-rate shortfall")
-    steer_limit_rad: float = _spec(default=0.6, doc="|delta_f| limit")
+                                   doc="k_r, road-wheel rad per rad/s of yaw-rate shortfall",
+                                   bounds=(0.0, 10.0))
+    steer_limit_rad: float = _spec(default=0.6, doc="|delta_f| limit", bounds=(1e-3, 1.0))
 
 
 class PreviewPathDriver:
@@ -433,24 +443,32 @@ class TrackingDriverSpec:
     """
 
     preview_time_s: float = _spec("nonnegative", default=0.047,
-                                  doc="T_p, curvature preview, s")
+                                  doc="T_p, curvature preview, s", bounds=(0.0, 5.0))
     path_frequency_radps: float = _spec(default=4.6,
-                                        doc="w_n, natural frequency of the path error, rad/s")
-    path_damping: float = _spec(default=1.1, doc="zeta, damping ratio of the path error")
+                                        doc="w_n, natural frequency of the path error, rad/s",
+                                        bounds=(0.01, 100.0))
+    path_damping: float = _spec(default=1.1, doc="zeta, damping ratio of the path error",
+                                bounds=(0.01, 10.0))
     turn_rate_gain_s: float = _spec("nonnegative", default=0.37,
-                                    doc="k_p, road-wheel rad per rad/s of turning-rate error")
+                                    doc="k_p, road-wheel rad per rad/s of turning-rate error",
+                                    bounds=(0.0, 100.0))
     turn_integral_gain: float = _spec("nonnegative", default=1.2,
-                                      doc="k_i, road-wheel rad per rad of its integral")
+                                      doc="k_i, road-wheel rad per rad of its integral",
+                                      bounds=(0.0, 100.0))
     yaw_rate_weight: float = _spec("fraction", default=0.79,
-                                   doc="w, yaw-rate share of the felt turning rate")
+                                   doc="w, yaw-rate share of the felt turning rate",
+                                   bounds=(0.0, 1.0))
     lateral_accel_lag_s: float = _spec("nonnegative", default=0.078,
-                                       doc="T_a, lag of the lateral-acceleration cue, s")
+                                       doc="T_a, lag of the lateral-acceleration cue, s",
+                                       bounds=(0.0, 5.0))
     sideslip_gain: float = _spec("nonnegative", default=0.63,
-                                 doc="k_b, road-wheel rad of countersteer per rad of sideslip")
+                                 doc="k_b, road-wheel rad of countersteer per rad of sideslip",
+                                 bounds=(0.0, 100.0))
     neuromuscular_lag_s: float = _spec("nonnegative", default=0.047,
-                                       doc="T_n, first-order steering lag, s")
-    steer_limit_rad: float = _spec(default=0.6, doc="|delta_f| limit, rad")
-    min_speed_mps: float = _spec(default=2.0, doc="floor of U in the 1/U terms, m/s")
+                                       doc="T_n, first-order steering lag, s", bounds=(0.0, 5.0))
+    steer_limit_rad: float = _spec(default=0.6, doc="|delta_f| limit, rad", bounds=(1e-3, 1.0))
+    min_speed_mps: float = _spec(default=2.0, doc="floor of U in the 1/U terms, m/s",
+                                 bounds=(0.01, MAX_SPEED_MPS))
 
 
 class PathTrackingDriver:
@@ -522,22 +540,26 @@ class PathTrackingDriver:
         return self._steer_rad
 
 
-def speed_hold_spec_from(data: Any, source: str | None, prefix: str = "speed_hold."
-                         ) -> SpeedHoldSpec:
-    """Validate a ``speed_hold`` mapping (``None`` gives the defaults)."""
-    return _from_mapping(SpeedHoldSpec, {} if data is None else data, source, prefix)
+def speed_hold_spec_from(data: Any, source: str | None, prefix: str = "speed_hold.",
+                         unchecked: frozenset[str] = frozenset()) -> SpeedHoldSpec:
+    """Validate a ``speed_hold`` mapping (``None`` gives the defaults); ``unchecked``: dotted
+    names whose plausibility bounds are lifted."""
+    return _from_mapping(SpeedHoldSpec, {} if data is None else data, source, prefix,
+                         unchecked)
 
 
-def path_driver_spec_from(data: Any, source: str | None, prefix: str = "path_driver."
-                          ) -> PathDriverSpec:
+def path_driver_spec_from(data: Any, source: str | None, prefix: str = "path_driver.",
+                          unchecked: frozenset[str] = frozenset()) -> PathDriverSpec:
     """Validate a ``path_driver`` mapping (``None`` gives the defaults)."""
-    return _from_mapping(PathDriverSpec, {} if data is None else data, source, prefix)
+    return _from_mapping(PathDriverSpec, {} if data is None else data, source, prefix,
+                         unchecked)
 
 
-def tracking_driver_spec_from(data: Any, source: str | None, prefix: str = "tracking_driver."
-                              ) -> TrackingDriverSpec:
+def tracking_driver_spec_from(data: Any, source: str | None, prefix: str = "tracking_driver.",
+                              unchecked: frozenset[str] = frozenset()) -> TrackingDriverSpec:
     """Validate a ``tracking_driver`` mapping (``None`` gives the defaults)."""
-    return _from_mapping(TrackingDriverSpec, {} if data is None else data, source, prefix)
+    return _from_mapping(TrackingDriverSpec, {} if data is None else data, source, prefix,
+                         unchecked)
 
 
 __all__ = [

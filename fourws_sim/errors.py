@@ -38,11 +38,15 @@ class ParameterError(FourwsError):
 class UnknownNameError(FourwsError):
     """A name (model, tire, law, integrator, maneuver, vehicle) is not one of the known ones."""
 
-    def __init__(self, kind: str, name: str, valid: list[str] | tuple[str, ...]) -> None:
+    def __init__(self, kind: str, name: object, valid: list[str] | tuple[str, ...],
+                 source: str | None = None) -> None:
         self.kind = kind
         self.name = name
         self.valid = sorted(valid)
-        super().__init__(f"unknown {kind} {name!r}; valid: {', '.join(self.valid)}")
+        self.source = source
+        where = f" in {source}" if source else ""
+        super().__init__(f"unknown {kind} {describe(name)}; valid: {', '.join(self.valid)}"
+                         f"{where}")
 
 
 class NonFiniteError(FourwsError):
@@ -70,3 +74,16 @@ class DivergedError(NonFiniteError):
 
 class IncompatibleError(FourwsError):
     """Two valid things that do not go together (e.g. a 3-DOF law on a 2-DOF model)."""
+
+
+def describe(value: object, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters, for messages that quote a bad value (a
+    value may be a whole sub-document of a file)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 5] + " ...>"
+
+
+def one_line(exc: BaseException) -> str:
+    """The message of ``exc`` on one line (whitespace runs, newlines included, become one
+    space), as command-line tools and nodes print it."""
+    return " ".join(str(exc).split()) or type(exc).__name__

@@ -45,7 +45,7 @@ import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path as FilePath
-from typing import Any, Mapping
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
@@ -56,12 +56,41 @@ from fourws_sim.drivers import (
     SpeedHoldDriver, SpeedHoldSpec, SplinePath, TrackingDriverSpec, path_driver_spec_from,
     speed_hold_spec_from, split_brake_torque, tracking_driver_spec_from,
 )
-from fourws_sim.errors import ParameterError, UnknownNameError
-from fourws_sim.params import (CONFIG_DIR, GRAVITY_MPS2, Vehicle, _from_mapping, _spec,
-                               available_configs, read_yaml, resolve_config_path)
+from fourws_sim.errors import ParameterError, UnknownNameError, describe
+from fourws_sim.params import (CONFIG_DIR, GRAVITY_MPS2, MAX_SPEED_MPS, UNCHECKED_KEY, Vehicle,
+                               _from_mapping, _spec, available_configs, bounded_fields,
+                               check_plausible, read_yaml, resolve_config_path,
+                               unchecked_fields_from)
 
 MANEUVER_DIR = CONFIG_DIR / "maneuvers"
 STEER_INPUTS = ("road_wheel", "steering_wheel")
+
+# Plausibility bounds of maneuvers (docs/architecture.md, "Parameters"; a file may lift one
+# with ``unchecked_fields``). Speeds are bounded by fourws_sim.params.MAX_SPEED_MPS.
+#: Longest run, s (a realtime soak test is 10 min).
+MAX_DURATION_S = 3600.0
+#: Largest front road-wheel angle an input may ask for, rad (57 deg; steering locks are
+#: 30-45 deg).
+MAX_ROAD_WHEEL_ANGLE_RAD = 1.0
+#: Largest hand-wheel angle, rad (3 turns; cars have 1.2-1.8 turns from centre to lock).
+MAX_HAND_WHEEL_ANGLE_RAD = 6.0 * math.pi
+#: Highest steering frequency, Hz (ISO 7401 tests reach 4-5 Hz; no steering system follows
+#: more than ~20 Hz).
+MAX_STEER_FREQUENCY_HZ = 20.0
+# Hard limits (never lifted): what a maneuver may cost before it runs.
+#: Samples of a random input (``length_s * sample_rate_hz``).
+MAX_RANDOM_SAMPLES = 4_000_000
+#: Grid points of a planned lane-change line (the planner solves two linear programs of this
+#: size; 0.5 m steps give ~220).
+MAX_PATH_POINTS = 5_000
+#: Peak of a random input per unit rms, used for its angle bound (band-limited Gaussian
+#: noise exceeds 4 rms on ~1 sample in 16 000).
+RANDOM_PEAK_PER_RMS = 4.0
+
+_TIME_S = (0.0, MAX_DURATION_S)
+_ANGLE_RAD = (-MAX_HAND_WHEEL_ANGLE_RAD, MAX_HAND_WHEEL_ANGLE_RAD)
+_FREQUENCY_HZ = (1e-3, MAX_STEER_FREQUENCY_HZ)
+_RATE_RADPS = (1e-4, 100.0)
 #: Tolerance on ``t >= duration`` so a tick time k*Tc that lands a rounding error short of the
 #: duration still ends the run (s; far below any control period).
 _TIME_EPS_S = 1e-9
@@ -115,13 +144,21 @@ class StepSteerParams(_RampAndHold):
     """
 
     amplitude_rad: float | None = None
-    start_s: float = _spec("nonnegative", default=0.5)
-    ramp_time_s: float = _spec("nonnegative", default=0.1)
+    start_s: float = _spec("nonnegative", default=0.5, bounds=_TIME_S)
+    ramp_time_s: float = _spec("nonnegative", default=0.1, bounds=_TIME_S)
     target_lateral_accel_mps2: float | None = None
     amplitude_law: str = ""
     amplitude_lateral_accel_mps2: float | None = None
 
-    def _check(self, source: str | None, prefix: str) -> None:
+    #: Plausibility bounds of the optional number fields (not ``_spec`` fields: they may be
+    #: absent), rad and m/s^2.
+    OPTIONAL_BOUNDS: ClassVar[Mapping[str, tuple[float, float]]] = {
+        "amplitude_rad": _ANGLE_RAD, "target_lateral_accel_mps2": (0.01, 30.0),
+        "amplitude_lateral_accel_mps2": (0.0, 30.0)}
+    event_fields: ClassVar[tuple[str, ...]] = ("start_s",)
+
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
         for name in ("amplitude_rad", "target_lateral_accel_mps2",
                      "amplitude_lateral_accel_mps2"):
             value = getattr(self, name)
@@ -130,11 +167,14 @@ class StepSteerParams(_RampAndHold):
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value):
                 raise ParameterError(f"{prefix}{name}",
-                                     f"must be a finite number, got {value!r}", source)
+                                     f"must be a finite number, got {describe(value)}", source)
+            check_plausible(f"{prefix}{name}", abs(float(value)) if name == "amplitude_rad"
+                            else float(value), self.OPTIONAL_BOUNDS[name], source, unchecked)
             object.__setattr__(self, name, float(value))
         if not isinstance(self.amplitude_law, str):
             raise ParameterError(f"{prefix}amplitude_law",
-                                 f"must be a law name, got {self.amplitude_law!r}", source)
+                                 f"must be a law name, got {describe(self.amplitude_law)}",
+                                 source)
         target = self.target_lateral_accel_mps2
         if target is None:
             if self.amplitude_rad is None:
@@ -178,9 +218,11 @@ class RampSteerParams(_RampAndHold):
     """Ramp steer (ch. 8, after Nalecz and Bindemann): from ``start_s`` the angle grows at
     ``rate_radps`` until it reaches ``amplitude_rad``, then is held."""
 
-    amplitude_rad: float = _spec("any")
-    rate_radps: float = _spec()
-    start_s: float = _spec("nonnegative", default=0.5)
+    amplitude_rad: float = _spec("any", bounds=_ANGLE_RAD)
+    rate_radps: float = _spec(bounds=_RATE_RADPS)
+    start_s: float = _spec("nonnegative", default=0.5, bounds=_TIME_S)
+
+    event_fields: ClassVar[tuple[str, ...]] = ("start_s",)
 
     @property
     def ramp_time_s(self) -> float:
@@ -195,8 +237,8 @@ class SlowRampSteerParams(RampSteerParams):
     ``|a_y| >= max_lateral_accel_mps2``, when ``|sideslip| > max_sideslip_rad`` (the car left
     the quasi-steady regime: it is spinning), or at ``duration_s``."""
 
-    max_lateral_accel_mps2: float = _spec(default=8.0)
-    max_sideslip_rad: float = _spec(default=0.15)
+    max_lateral_accel_mps2: float = _spec(default=8.0, bounds=(0.01, 30.0))
+    max_sideslip_rad: float = _spec(default=0.15, bounds=(1e-3, math.pi / 2))
 
 
 @dataclass(frozen=True)
@@ -204,9 +246,15 @@ class SineParams:
     """ISO 7401 single-period sine: ``A sin(2 pi f (t - t0))`` for one period from ``start_s``,
     zero before and after."""
 
-    amplitude_rad: float = _spec("any")
-    frequency_hz: float = _spec()
-    start_s: float = _spec("nonnegative", default=0.5)
+    amplitude_rad: float = _spec("any", bounds=_ANGLE_RAD)
+    frequency_hz: float = _spec(bounds=_FREQUENCY_HZ)
+    start_s: float = _spec("nonnegative", default=0.5, bounds=_TIME_S)
+
+    event_fields: ClassVar[tuple[str, ...]] = ("start_s",)
+
+    def shortest_period_s(self) -> tuple[str, float]:
+        """The field setting the shortest period of the input, and that period in s."""
+        return "frequency_hz", 1.0 / self.frequency_hz
 
     def steer(self, t: float) -> float:
         """Input angle (rad) at time ``t`` (s)."""
@@ -229,14 +277,23 @@ class SweptSineParams:
     frequency ``f(tau) = dphi/dtau / 2 pi`` going from ``f_start_hz`` to ``f_end_hz``,
     linearly (``f0 + (f1 - f0) tau / T``) or logarithmically (``f0 (f1/f0)^(tau/T)``)."""
 
-    amplitude_rad: float = _spec("any")
-    f_start_hz: float = _spec()
-    f_end_hz: float = _spec()
-    sweep_time_s: float = _spec()
-    start_s: float = _spec("nonnegative", default=1.0)
+    amplitude_rad: float = _spec("any", bounds=_ANGLE_RAD)
+    f_start_hz: float = _spec(bounds=_FREQUENCY_HZ)
+    f_end_hz: float = _spec(bounds=_FREQUENCY_HZ)
+    sweep_time_s: float = _spec(bounds=(1e-2, MAX_DURATION_S))
+    start_s: float = _spec("nonnegative", default=1.0, bounds=_TIME_S)
     spacing: str = "logarithmic"
 
-    def _check(self, source: str | None, prefix: str) -> None:
+    event_fields: ClassVar[tuple[str, ...]] = ("start_s",)
+
+    def shortest_period_s(self) -> tuple[str, float]:
+        """The field setting the shortest period of the input, and that period in s."""
+        if self.f_end_hz >= self.f_start_hz:
+            return "f_end_hz", 1.0 / self.f_end_hz
+        return "f_start_hz", 1.0 / self.f_start_hz
+
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
         if self.spacing not in ("linear", "logarithmic"):
             raise ParameterError(f"{prefix}spacing",
                                  f"must be linear or logarithmic, got {self.spacing!r}", source)
@@ -279,19 +336,30 @@ class RandomSteerParams:
     noise sampled at ``sample_rate_hz``), scaled to ``rms_rad``, faded in with a raised cosine
     over ``fade_s`` from ``start_s`` and linearly interpolated between samples."""
 
-    rms_rad: float = _spec()
-    f_high_hz: float = _spec()
-    f_low_hz: float = _spec("nonnegative", default=0.0)
-    length_s: float = _spec(default=60.0)
+    rms_rad: float = _spec(bounds=(0.0, MAX_HAND_WHEEL_ANGLE_RAD / RANDOM_PEAK_PER_RMS))
+    f_high_hz: float = _spec(bounds=_FREQUENCY_HZ)
+    f_low_hz: float = _spec("nonnegative", default=0.0, bounds=(0.0, MAX_STEER_FREQUENCY_HZ))
+    length_s: float = _spec(default=60.0, bounds=(1e-2, MAX_DURATION_S))
     seed: int = 0
-    start_s: float = _spec("nonnegative", default=1.0)
-    fade_s: float = _spec("nonnegative", default=1.0)
-    sample_rate_hz: float = _spec(default=200.0)
+    start_s: float = _spec("nonnegative", default=1.0, bounds=_TIME_S)
+    fade_s: float = _spec("nonnegative", default=1.0, bounds=_TIME_S)
+    sample_rate_hz: float = _spec(default=200.0, bounds=(1.0, 1e4))
 
-    def _check(self, source: str | None, prefix: str) -> None:
+    event_fields: ClassVar[tuple[str, ...]] = ("start_s",)
+
+    def shortest_period_s(self) -> tuple[str, float]:
+        """The field setting the shortest period of the input, and that period in s."""
+        return "f_high_hz", 1.0 / self.f_high_hz
+
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ParameterError(f"{prefix}seed", f"must be an integer >= 0, got {self.seed!r}",
-                                 source)
+            raise ParameterError(f"{prefix}seed",
+                                 f"must be an integer >= 0, got {describe(self.seed)}", source)
+        if self.length_s * self.sample_rate_hz > MAX_RANDOM_SAMPLES:
+            raise ParameterError(f"{prefix}length_s", f"length_s * sample_rate_hz = "
+                                 f"{self.length_s * self.sample_rate_hz:.3g} samples, more "
+                                 f"than the limit {MAX_RANDOM_SAMPLES}", source)
         if self.f_high_hz <= self.f_low_hz:
             raise ParameterError(f"{prefix}f_high_hz", "must be > f_low_hz", source)
         if self.f_high_hz >= 0.5 * self.sample_rate_hz:
@@ -315,12 +383,19 @@ class PulseParams:
     """ISO 7401 pulse input: a single pulse of ``width_s`` from ``start_s``, ``triangle``
     (area A w / 2) or ``half_sine`` (area 2 A w / pi)."""
 
-    amplitude_rad: float = _spec("any")
-    width_s: float = _spec(default=0.4)
-    start_s: float = _spec("nonnegative", default=0.5)
+    amplitude_rad: float = _spec("any", bounds=_ANGLE_RAD)
+    width_s: float = _spec(default=0.4, bounds=(1e-3, MAX_DURATION_S))
+    start_s: float = _spec("nonnegative", default=0.5, bounds=_TIME_S)
     shape: str = "triangle"
 
-    def _check(self, source: str | None, prefix: str) -> None:
+    event_fields: ClassVar[tuple[str, ...]] = ("start_s",)
+
+    def shortest_period_s(self) -> tuple[str, float]:
+        """The field setting the shortest period of the input, and that period in s."""
+        return "width_s", self.width_s
+
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
         if self.shape not in ("triangle", "half_sine"):
             raise ParameterError(f"{prefix}shape",
                                  f"must be triangle or half_sine, got {self.shape!r}", source)
@@ -358,15 +433,16 @@ class ConstantRadiusParams:
     longer hold the circle) or the sideslip exceeds ``max_sideslip_rad`` (the car spun; the
     kinematic sideslip b/R of a 40 m circle is ~0.04 rad)."""
 
-    radius_m: float = _spec()
-    final_speed_mps: float = _spec()
-    speed_step_mps: float = _spec(default=1.0)
-    dwell_s: float = _spec(default=8.0)
+    radius_m: float = _spec(bounds=(0.1, 1e4))
+    final_speed_mps: float = _spec(bounds=(0.0, MAX_SPEED_MPS))
+    speed_step_mps: float = _spec(default=1.0, bounds=(1e-3, MAX_SPEED_MPS))
+    dwell_s: float = _spec(default=8.0, bounds=(1e-2, MAX_DURATION_S))
     direction: str = "left"
-    max_path_error_m: float = _spec(default=5.0)
-    max_sideslip_rad: float = _spec(default=0.25)
+    max_path_error_m: float = _spec(default=5.0, bounds=(1e-2, 1e3))
+    max_sideslip_rad: float = _spec(default=0.25, bounds=(1e-3, math.pi / 2))
 
-    def _check(self, source: str | None, prefix: str) -> None:
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
         if self.direction not in ("left", "right"):
             raise ParameterError(f"{prefix}direction",
                                  f"must be left or right, got {self.direction!r}", source)
@@ -389,13 +465,26 @@ class DoubleLaneChangeParams:
     ``path_runout_m`` after section 5, on a grid of ``path_step_m``.
     """
 
-    vehicle_width_m: float = _spec(default=1.7)
-    approach_m: float = _spec(default=30.0, doc="start to section 1, m")
+    vehicle_width_m: float = _spec(default=1.7, bounds=(0.05, 5.0))
+    approach_m: float = _spec(default=30.0, doc="start to section 1, m", bounds=(0.1, 1e3))
     path_lateral_accel_mps2: float = _spec(default=6.25,
-                                           doc="line's lateral-acceleration bound")
-    path_lateral_jerk_mps3: float = _spec(default=30.0, doc="line's lateral-jerk bound")
-    path_runout_m: float = _spec(default=20.0, doc="straight run-out after section 5, m")
-    path_step_m: float = _spec(default=0.5, doc="grid step of the line, m")
+                                           doc="line's lateral-acceleration bound",
+                                           bounds=(0.1, 30.0))
+    path_lateral_jerk_mps3: float = _spec(default=30.0, doc="line's lateral-jerk bound",
+                                          bounds=(0.1, 1e3))
+    path_runout_m: float = _spec(default=20.0, doc="straight run-out after section 5, m",
+                                 bounds=(0.1, 1e3))
+    path_step_m: float = _spec(default=0.5, doc="grid step of the line, m", bounds=(0.01, 5.0))
+
+    #: Length of the ISO 3888-2 course from the entry of section 1 to the exit of section 5, m.
+    COURSE_LENGTH_M: ClassVar[float] = 61.0
+
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
+        points = (self.approach_m + self.COURSE_LENGTH_M + self.path_runout_m) / self.path_step_m
+        if points > MAX_PATH_POINTS:
+            raise ParameterError(f"{prefix}path_step_m", f"gives a line of {points:.3g} points, "
+                                 f"more than the limit {MAX_PATH_POINTS}", source)
 
     @property
     def sections(self) -> list[tuple[float, float, float, float]]:
@@ -414,7 +503,8 @@ class DoubleLaneChangeParams:
         """The widest-margin line for ``speed_mps`` (m/s), earth frame (cached per input)."""
         return _planned_line(tuple(self.sections), self.vehicle_width_m, float(speed_mps),
                              self.path_lateral_accel_mps2, self.path_lateral_jerk_mps3,
-                             self.approach_m + 61.0 + self.path_runout_m, self.path_step_m)
+                             self.approach_m + self.COURSE_LENGTH_M + self.path_runout_m,
+                             self.path_step_m)
 
     def path(self, speed_mps: float) -> SplinePath:
         """The driver's reference line for ``speed_mps`` (m/s) as a :class:`SplinePath`."""
@@ -447,12 +537,14 @@ class BrakeInTurnParams:
     ``brake_front_fraction``. No drive torque while braking; afterwards the speed-hold driver
     holds the speed reached at the brake release."""
 
-    amplitude_rad: float = _spec("any")
-    rate_radps: float = _spec()
-    steer_start_s: float = _spec("nonnegative", default=0.5)
-    brake_start_s: float = _spec("nonnegative", default=2.0)
-    brake_duration_s: float = _spec(default=1.0)
-    deceleration_mps2: float = _spec(default=0.3 * GRAVITY_MPS2)
+    amplitude_rad: float = _spec("any", bounds=_ANGLE_RAD)
+    rate_radps: float = _spec(bounds=_RATE_RADPS)
+    steer_start_s: float = _spec("nonnegative", default=0.5, bounds=_TIME_S)
+    brake_start_s: float = _spec("nonnegative", default=2.0, bounds=_TIME_S)
+    brake_duration_s: float = _spec(default=1.0, bounds=(1e-3, MAX_DURATION_S))
+    deceleration_mps2: float = _spec(default=0.3 * GRAVITY_MPS2, bounds=(0.01, 15.0))
+
+    event_fields: ClassVar[tuple[str, ...]] = ("steer_start_s", "brake_start_s")
 
     def steer(self, t: float) -> float:
         """Input angle (rad) at time ``t`` (s)."""
@@ -494,7 +586,7 @@ MANEUVER_TYPES: dict[str, type] = {
 #: Maneuver type -> its driver key (path-following types only).
 _DRIVER_KEYS = {"constant_radius": "path_driver", "double_lane_change": "tracking_driver"}
 _COMMON = ("name", "type", "description", "initial_speed_mps", "duration_s", "steer_input",
-           "speed_hold", "path_driver", "tracking_driver")
+           "speed_hold", "path_driver", "tracking_driver", UNCHECKED_KEY)
 
 
 @dataclass(frozen=True)
@@ -512,6 +604,7 @@ class ManeuverSpec:
     path_driver: PathDriverSpec | None = None
     tracking_driver: TrackingDriverSpec | None = None
     source: str = field(default="", compare=False)
+    unchecked_fields: frozenset[str] = frozenset()
 
     def to_dict(self) -> dict[str, Any]:
         """The file layout as a plain mapping (round-trips through :func:`load_maneuver_spec`)."""
@@ -527,6 +620,8 @@ class ManeuverSpec:
             out["tracking_driver"] = dataclasses.asdict(self.tracking_driver)
         to_dict = getattr(self.params, "to_dict", None)
         out.update(to_dict() if to_dict is not None else dataclasses.asdict(self.params))
+        if self.unchecked_fields:
+            out[UNCHECKED_KEY] = sorted(self.unchecked_fields)
         return out
 
 
@@ -544,19 +639,27 @@ def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
     UnknownNameError
         ``type`` is not one of :data:`MANEUVER_TYPES`.
     ParameterError
-        A field is missing, unknown, of the wrong type or out of range (names field and file).
+        A field is missing, unknown, of the wrong type, out of range or outside its
+        plausibility bounds (names field and file).
     """
     if not isinstance(data, Mapping):
-        raise ParameterError("<root>", "maneuver must be a mapping", source)
+        raise ParameterError("<root>", f"maneuver must be a mapping, got {describe(data)}",
+                             source)
     if "type" not in data:
         raise ParameterError("type", f"missing required field (valid: "
                              f"{', '.join(sorted(MANEUVER_TYPES))})", source)
     kind = data["type"]
     if not isinstance(kind, str) or kind not in MANEUVER_TYPES:
-        raise UnknownNameError("maneuver type", str(kind), list(MANEUVER_TYPES))
+        raise UnknownNameError("maneuver type", kind, list(MANEUVER_TYPES), source)
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name:
-        raise ParameterError("name", "must be a non-empty string", source)
+        raise ParameterError("name", f"must be a non-empty string, got {describe(name)}", source)
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise ParameterError("description", f"must be a string, got {describe(description)}",
+                             source)
+    params_cls = MANEUVER_TYPES[kind]
+    unchecked = unchecked_fields_from(data, _maneuver_bounded_fields(params_cls), source)
     common: dict[str, float] = {}
     for key in ("initial_speed_mps", "duration_s"):
         if key not in data:
@@ -564,37 +667,110 @@ def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
         value = data[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not math.isfinite(value):
-            raise ParameterError(key, f"must be a finite number, got {value!r}", source)
+            raise ParameterError(key, f"must be a finite number, got {describe(value)}", source)
         common[key] = float(value)
     if common["initial_speed_mps"] < 0.0:
         raise ParameterError("initial_speed_mps", "must be >= 0", source)
     if common["duration_s"] <= 0.0:
         raise ParameterError("duration_s", "must be > 0", source)
+    for key, bounds in _COMMON_BOUNDS.items():
+        check_plausible(key, common[key], bounds, source, unchecked)
     steer_input = data.get("steer_input", "road_wheel")
     if steer_input not in STEER_INPUTS:
-        raise ParameterError("steer_input",
-                             f"must be one of {', '.join(STEER_INPUTS)}, got {steer_input!r}",
-                             source)
+        raise ParameterError("steer_input", f"must be one of {', '.join(STEER_INPUTS)}, "
+                                            f"got {describe(steer_input)}", source)
     for key in ("path_driver", "tracking_driver"):
         if key in data and _DRIVER_KEYS.get(kind) != key:
             types = [k for k, v in _DRIVER_KEYS.items() if v == key]
             raise ParameterError(key, f"only for {', '.join(types)}", source)
     type_fields = {k: v for k, v in data.items() if k not in _COMMON}
-    params = _from_mapping(MANEUVER_TYPES[kind], type_fields, source, "")
+    params = _from_mapping(params_cls, type_fields, source, "", unchecked)
     if kind == "constant_radius" and params.final_speed_mps < common["initial_speed_mps"]:
         raise ParameterError("final_speed_mps", "must be >= initial_speed_mps", source)
-    if kind == "double_lane_change" and common["initial_speed_mps"] <= 0.0:
-        raise ParameterError("initial_speed_mps", "must be > 0 (the line is planned for it)",
-                             source)
+    if kind == "double_lane_change":
+        if common["initial_speed_mps"] <= 0.0:
+            raise ParameterError("initial_speed_mps", "must be > 0 (the line is planned for it)",
+                                 source)
+        course_end_m = params.approach_m + params.COURSE_LENGTH_M
+        if common["initial_speed_mps"] * common["duration_s"] < course_end_m:
+            raise ParameterError("duration_s", f"too short to reach the end of the course "
+                                 f"({course_end_m:g} m) at initial_speed_mps", source)
+    for key in getattr(params_cls, "event_fields", ()):
+        if getattr(params, key) >= common["duration_s"]:
+            raise ParameterError(key, f"{getattr(params, key):g} s is not before the end of the "
+                                 f"run (duration_s {common['duration_s']:g} s): the input "
+                                 "would never be applied", source)
+    _check_peak_input(params, steer_input, source, unchecked)
     return ManeuverSpec(
         name=name, type=kind, params=params, steer_input=steer_input,
-        description=str(data.get("description", "")),
-        speed_hold=speed_hold_spec_from(data.get("speed_hold"), source),
-        path_driver=(path_driver_spec_from(data.get("path_driver"), source)
+        description=description,
+        speed_hold=speed_hold_spec_from(data.get("speed_hold"), source, unchecked=unchecked),
+        path_driver=(path_driver_spec_from(data.get("path_driver"), source,
+                                           unchecked=unchecked)
                      if _DRIVER_KEYS.get(kind) == "path_driver" else None),
-        tracking_driver=(tracking_driver_spec_from(data.get("tracking_driver"), source)
+        tracking_driver=(tracking_driver_spec_from(data.get("tracking_driver"), source,
+                                                   unchecked=unchecked)
                          if _DRIVER_KEYS.get(kind) == "tracking_driver" else None),
-        source=source, **common)
+        source=source, unchecked_fields=unchecked, **common)
+
+
+#: Plausibility bounds of the fields every maneuver has.
+_COMMON_BOUNDS = {"initial_speed_mps": (0.0, MAX_SPEED_MPS), "duration_s": (1e-3, MAX_DURATION_S)}
+
+
+def _maneuver_bounded_fields(params_cls: type) -> set[str]:
+    """Names ``unchecked_fields`` of a maneuver of this parameter class may list."""
+    return {*_COMMON_BOUNDS, *bounded_fields(params_cls),
+            *bounded_fields(SpeedHoldSpec, "speed_hold."),
+            *bounded_fields(PathDriverSpec, "path_driver."),
+            *bounded_fields(TrackingDriverSpec, "tracking_driver.")}
+
+
+def _peak_input(params: Any) -> tuple[str, float] | None:
+    """The field that sets the largest open-loop input angle and that angle (rad, in the unit
+    of ``steer_input``); None for closed-loop types."""
+    if isinstance(params, RandomSteerParams):
+        return "rms_rad", RANDOM_PEAK_PER_RMS * params.rms_rad
+    if getattr(params, "amplitude_rad", None) is not None:  # None: a step still to resolve
+        return "amplitude_rad", abs(params.amplitude_rad)
+    return None
+
+
+def _check_peak_input(params: Any, steer_input: str, source: str | None,
+                      unchecked: frozenset[str]) -> None:
+    peak = _peak_input(params)
+    if peak is None or peak[0] in unchecked:
+        return
+    limit, what = ((MAX_ROAD_WHEEL_ANGLE_RAD, "road-wheel") if steer_input == "road_wheel"
+                   else (MAX_HAND_WHEEL_ANGLE_RAD, "hand-wheel"))
+    if peak[1] > limit:
+        raise ParameterError(peak[0], f"asks for a {what} angle of {peak[1]:.4g} rad, beyond the "
+                             f"plausible {limit:.4g} rad (list it under {UNCHECKED_KEY} to "
+                             "accept it)", source)
+
+
+def check_sampling(spec: ManeuverSpec, control_period_s: float, source: str | None) -> None:
+    """Refuse an input the control rate cannot represent: its shortest period (a sine's, the
+    end of a sweep, a random input's band edge, a pulse's width) must span more than two
+    control periods, i.e. its frequency must lie below the Nyquist frequency of the control
+    rate (the driver samples the input once per control period; a sine at exactly the Nyquist
+    frequency may be sampled at its zeros only).
+
+    Raises
+    ------
+    ParameterError
+        Naming the maneuver field and the control period (never lifted by
+        ``unchecked_fields``: the run would not contain the input asked for).
+    """
+    shortest = getattr(spec.params, "shortest_period_s", None)
+    if shortest is None:
+        return
+    key, period = shortest()
+    if period <= 2.0 * control_period_s:
+        raise ParameterError(f"maneuver.{key}", f"its period {period:.4g} s is not longer than "
+                             f"two control periods ({control_period_s:g} s): not below the "
+                             f"control rate's Nyquist frequency {0.5 / control_period_s:g} Hz",
+                             source)
 
 
 def resolve_maneuver_path(name_or_path: str | FilePath) -> FilePath:
@@ -634,6 +810,15 @@ class Maneuver:
         # Vehicles with no steering data report the hand-wheel angle equal to the road-wheel
         # angle (ratio 1); they only run road-wheel inputs.
         self._ratio = vehicle.steering.ratio if vehicle.steering is not None else 1.0
+        peak = _peak_input(p)
+        if (spec.steer_input == "steering_wheel" and peak is not None
+                and peak[0] not in spec.unchecked_fields
+                and peak[1] / self._ratio > MAX_ROAD_WHEEL_ANGLE_RAD):
+            raise ParameterError(peak[0], f"asks for a road-wheel angle of "
+                                 f"{peak[1] / self._ratio:.4g} rad on {vehicle.name} (steering "
+                                 f"ratio {self._ratio:g}), beyond the plausible "
+                                 f"{MAX_ROAD_WHEEL_ANGLE_RAD:g} rad (list it under "
+                                 f"{UNCHECKED_KEY} to accept it)", spec.source or spec.name)
         self._speed_driver = SpeedHoldDriver(spec.speed_hold, vehicle)
         self._path_driver: PreviewPathDriver | PathTrackingDriver | None = None
         self._random: np.ndarray | None = None

@@ -32,9 +32,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Mapping
 
-import yaml
-
-from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.config_yaml import read_yaml
+from fourws_sim.errors import ParameterError, UnknownNameError, describe
 
 def find_resource_dir(beside: Path, package: str, sub: str, marker: str) -> Path:
     """A folder shipped with fourws: ``beside`` in a checkout or an editable install, else
@@ -61,10 +60,37 @@ GRAVITY_MPS2 = 9.80665
 #: RR.
 N_WHEELS = 4
 
+# Plausibility bounds (see docs/architecture.md, "Parameters"). Vehicle fields carry theirs in
+# their declaration (``_spec(bounds=...)``); these are the ones shared across modules.
+#: Fastest forward speed of any vehicle, maneuver or analysis, m/s (540 km/h).
+MAX_SPEED_MPS = 150.0
+#: Largest rear road-wheel angle limit an actuator may have, rad (45 deg).
+MAX_REAR_ANGLE_RAD = math.pi / 4
+#: Largest rear-steer rate limit, rad/s.
+MAX_REAR_RATE_RADPS = 10.0
+#: Magnitude bound of fitted tire coefficients (``tire.sti``, ``tire.magic_formula``).
+TIRE_COEFFICIENT_BOUNDS = (-1e6, 1e6)
 
-def _spec(check: str = "positive", doc: str = "", default: Any = dataclasses.MISSING) -> Any:
-    """Declare a float field with a range check ("positive", "nonnegative", "any", "fraction")."""
-    meta = {"check": check, "doc": doc}
+
+def _spec(check: str = "positive", doc: str = "", default: Any = dataclasses.MISSING,
+          bounds: tuple[float, float] | None = None) -> Any:
+    """Declare a float field with a range check and its plausibility bounds.
+
+    Parameters
+    ----------
+    check : str
+        What the value must be for the model to make sense at all: "positive",
+        "nonnegative", "any" or "fraction" (never overridable).
+    doc : str
+        Meaning, symbol and unit.
+    default : float, optional
+        Default value (the field is required without one).
+    bounds : (float, float), optional
+        Plausibility range ``[low, high]`` in the field's unit: what a real vehicle (1:28 scale
+        car to heavy truck) or maneuver can have. A value outside is refused unless the file
+        lists the field under ``unchecked_fields`` (see :func:`check_plausible`).
+    """
+    meta = {"check": check, "doc": doc, "bounds": bounds}
     if default is dataclasses.MISSING:
         return field(metadata=meta)
     return field(default=default, metadata=meta)
@@ -77,13 +103,16 @@ _CHECKS = {
     "fraction": (lambda v: 0.0 <= v <= 1.0, "must be within [0, 1]"),
 }
 
+#: Top-level key of vehicle, maneuver and scenario files listing the dotted names of fields
+#: whose plausibility bounds are not applied (for exotic vehicles; sign checks still apply).
+UNCHECKED_KEY = "unchecked_fields"
 
 def _check_value(value: Any, f: dataclasses.Field[Any], name: str,
                  source: str | None) -> float:
     """``value`` as a float if it passes the range check of field ``f``, else ParameterError
     naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(name, f"must be a number, got {value!r}", source)
+        raise ParameterError(name, f"must be a number, got {describe(value)}", source)
     value = float(value)
     if not math.isfinite(value):
         raise ParameterError(name, f"must be finite, got {value!r}", source)
@@ -93,11 +122,65 @@ def _check_value(value: Any, f: dataclasses.Field[Any], name: str,
     return value
 
 
-def _validate_dataclass(obj: Any, source: str | None, prefix: str) -> None:
+def check_plausible(name: str, value: float, bounds: tuple[float, float] | None,
+                    source: str | None, unchecked: frozenset[str] = frozenset()) -> None:
+    """Refuse ``value`` of field ``name`` outside ``bounds`` unless ``name`` is unchecked.
+
+    Raises
+    ------
+    ParameterError
+        Naming the field, the value, the range and the way to accept it anyway.
+    """
+    if bounds is None or name in unchecked:
+        return
+    low, high = bounds
+    if not low <= value <= high:
+        raise ParameterError(name, f"{value:.6g} is outside the plausible range "
+                                   f"[{low:g}, {high:g}] (list it under {UNCHECKED_KEY} to "
+                                   "accept it)", source)
+
+
+def bounded_fields(cls: type, prefix: str = "") -> list[str]:
+    """Dotted names of the fields of dataclass ``cls`` that have plausibility bounds (in their
+    ``_spec`` or in ``cls.OPTIONAL_BOUNDS``), and of the file shorthands (``cls.SHORTHANDS``)
+    that stand for them."""
+    names = [f"{prefix}{f.name}" for f in dataclasses.fields(cls)
+             if f.metadata.get("bounds") is not None]
+    # optional fields that are not _spec fields declare theirs in OPTIONAL_BOUNDS
+    return names + [f"{prefix}{key}" for key in (*getattr(cls, "SHORTHANDS", {}),
+                                                  *getattr(cls, "OPTIONAL_BOUNDS", {}))]
+
+
+def unchecked_fields_from(data: Mapping[str, Any], valid: list[str] | set[str],
+                          source: str | None) -> frozenset[str]:
+    """The ``unchecked_fields`` list of a file (empty if absent), each name checked.
+
+    Raises
+    ------
+    ParameterError
+        Not a list of strings, or a name that is not a bounded field of this file.
+    """
+    names = data.get(UNCHECKED_KEY)
+    if names is None:
+        return frozenset()
+    if not isinstance(names, (list, tuple)) or not all(isinstance(n, str) for n in names):
+        raise ParameterError(UNCHECKED_KEY, f"must be a list of field names, got "
+                                            f"{describe(names)}", source)
+    for n in names:
+        if n not in valid:
+            raise ParameterError(UNCHECKED_KEY, f"{n!r} is not a field with plausibility "
+                                                "bounds here", source)
+    return frozenset(names)
+
+
+def _validate_dataclass(obj: Any, source: str | None, prefix: str,
+                        unchecked: frozenset[str] = frozenset()) -> None:
     for f in dataclasses.fields(obj):
         if f.metadata.get("check") is None:
             continue
-        value = _check_value(getattr(obj, f.name), f, f"{prefix}{f.name}", source)
+        name = f"{prefix}{f.name}"
+        value = _check_value(getattr(obj, f.name), f, name, source)
+        check_plausible(name, value, f.metadata.get("bounds"), source, unchecked)
         object.__setattr__(obj, f.name, value)
 
 
@@ -126,34 +209,38 @@ def _expand_shorthands(cls: type, data: Mapping[str, Any], source: str | None,
     return out
 
 
-def _from_mapping(cls: type, data: Any, source: str | None, prefix: str) -> Any:
-    """Build dataclass ``cls`` from a mapping, rejecting unknown and missing fields."""
+def _from_mapping(cls: type, data: Any, source: str | None, prefix: str,
+                  unchecked: frozenset[str] = frozenset()) -> Any:
+    """Build dataclass ``cls`` from a mapping, rejecting unknown and missing fields and values
+    outside their checks and plausibility bounds (except the ``unchecked`` dotted names; a
+    listed shorthand lifts the bounds of the fields it sets)."""
     if not isinstance(data, Mapping):
-        raise ParameterError(prefix.rstrip(".") or "<root>", "must be a mapping", source)
+        raise ParameterError(prefix.rstrip(".") or "<root>",
+                             f"must be a mapping, got {describe(data)}", source)
     names = {f.name: f for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - set(names) - set(getattr(cls, "SHORTHANDS", {})))
+    shorthands: Mapping[str, tuple[str, ...]] = getattr(cls, "SHORTHANDS", {})
+    unknown = sorted(str(k) for k in data if k not in names and k not in shorthands)
     if unknown:
         raise ParameterError(
             f"{prefix}{unknown[0]}",
             f"unknown field (valid: "
-            f"{', '.join(sorted([*names, *getattr(cls, 'SHORTHANDS', {})]))})",
+            f"{', '.join(sorted([*names, *shorthands]))})",
             source,
         )
     data = _expand_shorthands(cls, data, source, prefix)
+    unchecked = unchecked | {f"{prefix}{target}" for key, targets in shorthands.items()
+                             if f"{prefix}{key}" in unchecked for target in targets}
     kwargs: dict[str, Any] = {}
     for name, f in names.items():
         if name in data:
             kwargs[name] = data[name]
         elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             raise ParameterError(f"{prefix}{name}", "missing required field", source)
-    try:
-        obj = cls(**kwargs)
-    except ParameterError:
-        raise
-    _validate_dataclass(obj, source, prefix)
+    obj = cls(**kwargs)
+    _validate_dataclass(obj, source, prefix, unchecked)
     post = getattr(obj, "_check", None)
     if post is not None:
-        post(source, prefix)
+        post(source, prefix, unchecked)
     return obj
 
 
@@ -161,10 +248,11 @@ def _from_mapping(cls: type, data: Any, source: str | None, prefix: str) -> Any:
 class Chassis:
     """Whole-vehicle mass properties and axle positions (every model needs these)."""
 
-    mass_kg: float = _spec(doc="total vehicle mass m")
-    yaw_inertia_kgm2: float = _spec(doc="yaw moment of inertia Iz about the CG")
-    cg_to_front_axle_m: float = _spec(doc="a = Lf, CG to front axle")
-    cg_to_rear_axle_m: float = _spec(doc="b = Lr, CG to rear axle")
+    mass_kg: float = _spec(doc="total vehicle mass m", bounds=(0.1, 1e5))
+    yaw_inertia_kgm2: float = _spec(doc="yaw moment of inertia Iz about the CG",
+                                    bounds=(1e-5, 2e6))
+    cg_to_front_axle_m: float = _spec(doc="a = Lf, CG to front axle", bounds=(0.01, 15.0))
+    cg_to_rear_axle_m: float = _spec(doc="b = Lr, CG to rear axle", bounds=(0.01, 15.0))
 
     @property
     def wheelbase_m(self) -> float:
@@ -180,24 +268,32 @@ class AxleTires:
     ``F = -C * alpha`` for slip angle ``alpha`` in rad.
     """
 
-    cornering_stiffness_front_n_per_rad: float = _spec(doc="Cf, front axle")
-    cornering_stiffness_rear_n_per_rad: float = _spec(doc="Cr, rear axle")
+    cornering_stiffness_front_n_per_rad: float = _spec(doc="Cf, front axle", bounds=(1.0, 1e7))
+    cornering_stiffness_rear_n_per_rad: float = _spec(doc="Cr, rear axle", bounds=(1.0, 1e7))
 
 
 @dataclass(frozen=True)
 class Roll:
     """Sprung-mass roll data (3-DOF linear model and 8-DOF model)."""
 
-    sprung_mass_kg: float = _spec(doc="ms")
-    roll_inertia_kgm2: float = _spec(doc="Ix of the sprung mass about the roll axis")
-    roll_yaw_product_kgm2: float = _spec("any", doc="Ixz product of inertia of the sprung mass")
-    roll_arm_m: float = _spec(doc="h, sprung-mass CG above the roll axis")
-    roll_stiffness_front_nm_per_rad: float = _spec("nonnegative", doc="K_phi,f")
-    roll_stiffness_rear_nm_per_rad: float = _spec("nonnegative", doc="K_phi,r")
-    roll_damping_front_nms_per_rad: float = _spec("nonnegative", doc="C_phi,f")
-    roll_damping_rear_nms_per_rad: float = _spec("nonnegative", doc="C_phi,r")
-    roll_steer_front: float = _spec("any", doc="eps_f, front road-wheel steer per roll, rad/rad")
-    roll_steer_rear: float = _spec("any", doc="eps_r, rear road-wheel steer per roll, rad/rad")
+    sprung_mass_kg: float = _spec(doc="ms (at most chassis.mass_kg)", bounds=(0.05, 1e5))
+    roll_inertia_kgm2: float = _spec(doc="Ix of the sprung mass about the roll axis",
+                                     bounds=(1e-6, 1e6))
+    roll_yaw_product_kgm2: float = _spec("any", doc="Ixz product of inertia of the sprung mass",
+                                         bounds=(-1e6, 1e6))
+    roll_arm_m: float = _spec(doc="h, sprung-mass CG above the roll axis", bounds=(1e-3, 3.0))
+    roll_stiffness_front_nm_per_rad: float = _spec("nonnegative", doc="K_phi,f",
+                                                   bounds=(0.0, 5e7))
+    roll_stiffness_rear_nm_per_rad: float = _spec("nonnegative", doc="K_phi,r",
+                                                  bounds=(0.0, 5e7))
+    roll_damping_front_nms_per_rad: float = _spec("nonnegative", doc="C_phi,f",
+                                                  bounds=(0.0, 1e7))
+    roll_damping_rear_nms_per_rad: float = _spec("nonnegative", doc="C_phi,r",
+                                                 bounds=(0.0, 1e7))
+    roll_steer_front: float = _spec("any", doc="eps_f, front road-wheel steer per roll, rad/rad",
+                                    bounds=(-1.0, 1.0))
+    roll_steer_rear: float = _spec("any", doc="eps_r, rear road-wheel steer per roll, rad/rad",
+                                   bounds=(-1.0, 1.0))
 
     @property
     def roll_stiffness_nm_per_rad(self) -> float:
@@ -214,10 +310,13 @@ class Roll:
 class Steering:
     """Steering system: ratio, and the free-control first-order dynamics (ch. 3.4/4.4)."""
 
-    ratio: float = _spec(doc="steering-wheel angle per front road-wheel angle")
+    ratio: float = _spec(doc="steering-wheel angle per front road-wheel angle",
+                         bounds=(1.0, 50.0))
     damping_nms_per_rad: float = _spec("nonnegative", default=0.0,
-                                       doc="nu, viscous damping about the kingpin")
-    trail_m: float = _spec("nonnegative", default=0.0, doc="eta, caster/pneumatic trail")
+                                       doc="nu, viscous damping about the kingpin",
+                                       bounds=(0.0, 1e5))
+    trail_m: float = _spec("nonnegative", default=0.0, doc="eta, caster/pneumatic trail",
+                           bounds=(0.0, 0.5))
 
 
 @dataclass(frozen=True)
@@ -236,51 +335,68 @@ class Tire:
     }
 
     model: str = "linear"
-    friction_coefficient: float = _spec(default=1.0, doc="mu, peak friction (linear model)")
+    friction_coefficient: float = _spec(default=1.0, doc="mu, peak friction (linear model)",
+                                        bounds=(0.01, 3.0))
     relaxation_length_front_m: float = _spec(
-        "nonnegative", default=0.0, doc="sigma_f, relaxation length of a front tire, 0 = no lag")
+        "nonnegative", default=0.0, doc="sigma_f, relaxation length of a front tire, 0 = no lag",
+        bounds=(0.0, 10.0))
     relaxation_length_rear_m: float = _spec(
-        "nonnegative", default=0.0, doc="sigma_r, relaxation length of a rear tire, 0 = no lag")
+        "nonnegative", default=0.0, doc="sigma_r, relaxation length of a rear tire, 0 = no lag",
+        bounds=(0.0, 10.0))
     cubic_coefficient_front_per_rad2: float = _spec(
-        "nonnegative", default=0.0, doc="K of F = -C(1 - K alpha^2) alpha, front (ch. 7)")
+        "nonnegative", default=0.0, doc="K of F = -C(1 - K alpha^2) alpha, front (ch. 7)",
+        bounds=(0.0, 1e3))
     cubic_coefficient_rear_per_rad2: float = _spec(
-        "nonnegative", default=0.0, doc="K of F = -C(1 - K alpha^2) alpha, rear (ch. 7)")
+        "nonnegative", default=0.0, doc="K of F = -C(1 - K alpha^2) alpha, rear (ch. 7)",
+        bounds=(0.0, 1e3))
     longitudinal_stiffness_n: float = _spec(
         "nonnegative", default=0.0,
-        doc="C_s per tire, N per unit slip ratio (linear model; 0 = derive 1.5 x per-tire Calpha)")
+        doc="C_s per tire, N per unit slip ratio (linear model; 0 = derive 1.5 x per-tire Calpha)",
+        bounds=(0.0, 1e7))
     rolling_resistance: float = _spec("nonnegative", default=0.0,
-                                      doc="f_r, rolling-resistance force per normal load")
+                                      doc="f_r, rolling-resistance force per normal load",
+                                      bounds=(0.0, 0.5))
     sti: Mapping[str, float] = field(default_factory=dict)
     magic_formula: Mapping[str, float] = field(default_factory=dict)
 
-    def _check(self, source: str | None, prefix: str) -> None:
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
         valid = ("linear", "sti", "magic_formula")
         if self.model not in valid:
-            raise ParameterError(f"{prefix}model",
-                                 f"unknown tire model {self.model!r} (valid: {', '.join(valid)})",
-                                 source)
+            raise ParameterError(f"{prefix}model", f"unknown tire model {describe(self.model)} "
+                                                   f"(valid: {', '.join(valid)})", source)
         for group in ("sti", "magic_formula"):
             values = getattr(self, group)
             if not isinstance(values, Mapping):
-                raise ParameterError(f"{prefix}{group}", "must be a mapping", source)
+                raise ParameterError(f"{prefix}{group}",
+                                     f"must be a mapping, got {describe(values)}", source)
             for key, v in values.items():
+                name = f"{prefix}{group}.{key}"
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise ParameterError(f"{prefix}{group}.{key}",
-                                         f"must be a finite number, got {v!r}", source)
+                    raise ParameterError(name, f"must be a finite number, got {describe(v)}",
+                                         source)
+                # fitted coefficients: the tire module checks each one's sign; any magnitude
+                # beyond this is a slip of the pen (the largest shipped one is 4420)
+                check_plausible(name, float(v), TIRE_COEFFICIENT_BOUNDS, source, unchecked)
 
 
 @dataclass(frozen=True)
 class Body:
     """Spread-tire geometry and wheels of the 8-DOF model (ch. 8)."""
 
-    track_front_m: float = _spec(doc="Tf")
-    track_rear_m: float = _spec(doc="Tr")
-    cg_height_m: float = _spec(doc="total-mass CG height above ground (longitudinal transfer)")
-    roll_centre_height_front_m: float = _spec("nonnegative", doc="front roll-centre height")
-    roll_centre_height_rear_m: float = _spec("nonnegative", doc="rear roll-centre height")
-    unsprung_cg_height_m: float = _spec("nonnegative", doc="unsprung-mass CG height")
-    wheel_radius_m: float = _spec(doc="loaded rolling radius")
-    wheel_spin_inertia_kgm2: float = _spec(doc="Iw, one wheel about its spin axis")
+    track_front_m: float = _spec(doc="Tf", bounds=(0.02, 5.0))
+    track_rear_m: float = _spec(doc="Tr", bounds=(0.02, 5.0))
+    cg_height_m: float = _spec(doc="total-mass CG height above ground (longitudinal transfer)",
+                               bounds=(0.005, 5.0))
+    roll_centre_height_front_m: float = _spec("nonnegative", doc="front roll-centre height",
+                                              bounds=(0.0, 3.0))
+    roll_centre_height_rear_m: float = _spec("nonnegative", doc="rear roll-centre height",
+                                             bounds=(0.0, 3.0))
+    unsprung_cg_height_m: float = _spec("nonnegative", doc="unsprung-mass CG height",
+                                        bounds=(0.0, 3.0))
+    wheel_radius_m: float = _spec(doc="loaded rolling radius", bounds=(0.01, 2.0))
+    wheel_spin_inertia_kgm2: float = _spec(doc="Iw, one wheel about its spin axis",
+                                           bounds=(1e-7, 1e4))
 
 
 @dataclass(frozen=True)
@@ -288,8 +404,10 @@ class Actuators:
     """Rear-steer actuator limits (defaults: 5 deg, 30 deg/s; production 4WS systems stay
     within a few degrees of rear steer)."""
 
-    rear_angle_limit_rad: float = _spec(default=math.radians(5.0), doc="|delta_r| max")
-    rear_rate_limit_rad_per_s: float = _spec(default=math.radians(30.0), doc="|d delta_r/dt|")
+    rear_angle_limit_rad: float = _spec(default=math.radians(5.0), doc="|delta_r| max",
+                                        bounds=(1e-4, MAX_REAR_ANGLE_RAD))
+    rear_rate_limit_rad_per_s: float = _spec(default=math.radians(30.0), doc="|d delta_r/dt|",
+                                             bounds=(1e-3, MAX_REAR_RATE_RADPS))
 
 
 _SUBSYSTEMS: dict[str, type] = {
@@ -318,6 +436,7 @@ class Vehicle:
     actuators: Actuators = field(default_factory=Actuators)
     description: str = ""
     source: str = field(default="", compare=False)
+    unchecked_fields: frozenset[str] = frozenset()
 
     def require(self, *subsystems: str, user: str = "this model") -> None:
         """Raise :class:`ParameterError` unless every named subsystem is present."""
@@ -339,7 +458,7 @@ class Vehicle:
         t = self.axle_tires
         new = AxleTires(t.cornering_stiffness_front_n_per_rad * scale_front,
                         t.cornering_stiffness_rear_n_per_rad * s_r)
-        _validate_dataclass(new, self.source, "axle_tires.")
+        _validate_dataclass(new, self.source, "axle_tires.", self.unchecked_fields)
         return dataclasses.replace(self, axle_tires=new)
 
     def to_dict(self) -> dict[str, Any]:
@@ -350,6 +469,8 @@ class Vehicle:
             if sub is not None:
                 out[key] = {k: (dict(v) if isinstance(v, Mapping) else v)
                             for k, v in dataclasses.asdict(sub).items()}
+        if self.unchecked_fields:
+            out[UNCHECKED_KEY] = sorted(self.unchecked_fields)
         return out
 
 
@@ -367,22 +488,47 @@ def vehicle_from_mapping(data: Any, source: str = "<mapping>") -> Vehicle:
         except (KeyError, TypeError):
             raise ParameterError("/**.ros__parameters.vehicle", "missing", source) from None
     if not isinstance(data, Mapping):
-        raise ParameterError("<root>", "vehicle file must be a mapping", source)
-    allowed = set(_SUBSYSTEMS) | {"name", "description"}
-    unknown = sorted(set(data) - allowed)
+        raise ParameterError("<root>", f"vehicle file must be a mapping, got {describe(data)}",
+                             source)
+    allowed = set(_SUBSYSTEMS) | {"name", "description", UNCHECKED_KEY}
+    unknown = sorted(str(k) for k in data if k not in allowed)
     if unknown:
         raise ParameterError(unknown[0], f"unknown field (valid: {', '.join(sorted(allowed))})",
                              source)
     for key in ("name", *_REQUIRED):
         if key not in data:
             raise ParameterError(key, "missing required field", source)
+        if data[key] is None:
+            raise ParameterError(key, "is null; it is required", source)
     name = data["name"]
     if not isinstance(name, str) or not name:
-        raise ParameterError("name", "must be a non-empty string", source)
-    subs = {key: _from_mapping(cls, data[key], source, f"{key}.")
+        raise ParameterError("name", f"must be a non-empty string, got {describe(name)}", source)
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise ParameterError("description", f"must be a string, got {describe(description)}",
+                             source)
+    unchecked = unchecked_fields_from(data, _vehicle_bounded_fields(data), source)
+    # an optional subsystem given as null is absent (as if the key were not there)
+    subs = {key: _from_mapping(cls, data[key], source, f"{key}.", unchecked)
             for key, cls in _SUBSYSTEMS.items() if key in data and data[key] is not None}
-    return Vehicle(name=name, description=str(data.get("description", "")), source=source,
-                   **subs)
+    roll, chassis = subs.get("roll"), subs["chassis"]
+    if roll is not None and roll.sprung_mass_kg > chassis.mass_kg:
+        raise ParameterError("roll.sprung_mass_kg", f"{roll.sprung_mass_kg:g} kg exceeds "
+                             f"chassis.mass_kg ({chassis.mass_kg:g} kg)", source)
+    return Vehicle(name=name, description=description, source=source,
+                   unchecked_fields=unchecked, **subs)
+
+
+def _vehicle_bounded_fields(data: Mapping[str, Any]) -> set[str]:
+    """Names ``unchecked_fields`` of a vehicle may list: every bounded subsystem field and
+    the tire coefficients the file gives."""
+    names = {n for key, cls in _SUBSYSTEMS.items() for n in bounded_fields(cls, f"{key}.")}
+    tire = data.get("tire")
+    if isinstance(tire, Mapping):
+        for group in ("sti", "magic_formula"):
+            if isinstance(tire.get(group), Mapping):
+                names.update(f"tire.{group}.{k}" for k in tire[group])
+    return names
 
 
 def available_configs(folder: Path) -> list[str]:
@@ -410,14 +556,6 @@ def resolve_config_path(kind: str, name_or_path: str | Path, folder: Path) -> Pa
     if not candidate.is_file():
         raise UnknownNameError(kind, text, available_configs(folder))
     return candidate
-
-
-def read_yaml(path: Path) -> Any:
-    """Parse a YAML file; invalid YAML is a :class:`ParameterError` naming the file."""
-    try:
-        return yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ParameterError("<file>", f"not valid YAML ({exc})", str(path)) from None
 
 
 def available_vehicles() -> list[str]:

@@ -1,0 +1,586 @@
+"""Bad input from files and command lines: one test per class of error.
+
+Every bad input ends in one line naming the field and the file (a
+:class:`~fourws_sim.errors.FourwsError` in the core, ``fourws CMD: error: ...`` with exit code
+2 on the command line, ``[node] error: ...`` with exit code 2 from a node), never a traceback,
+and well-formed but physically absurd values are refused before anything runs. The numbers
+asserted come from the YAML 1.2 specification (core schema), the plausibility bounds as
+declared next to each field (read back from the declarations, so the test and the code share
+one fact), RK4's stability bound, and the files themselves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from fourws_cli.main import main
+from fourws_sim import config_yaml
+from fourws_sim.errors import ParameterError
+from fourws_sim.maneuvers import (MANEUVER_TYPES, MAX_DURATION_S, MAX_PATH_POINTS,
+                                  MAX_RANDOM_SAMPLES, MAX_ROAD_WHEEL_ANGLE_RAD,
+                                  MAX_STEER_FREQUENCY_HZ, load_maneuver_spec, make_maneuver)
+from fourws_sim.params import (MAX_SPEED_MPS, UNCHECKED_KEY, VEHICLE_DIR, available_vehicles,
+                               load_vehicle)
+from fourws_run.scenario import load_scenario
+
+SHIPPED = Path(VEHICLE_DIR).parent
+
+
+def _field(cls: type, name: str) -> dataclasses.Field:
+    return next(f for f in dataclasses.fields(cls) if f.name == name)
+
+
+def _bounds(cls: type, name: str) -> tuple[float, float]:
+    return _field(cls, name).metadata["bounds"]
+
+
+def _write(tmp_path: Path, data: dict | str | bytes, name: str = "bad.yaml") -> Path:
+    path = tmp_path / name
+    if isinstance(data, bytes):
+        path.write_bytes(data)
+    else:
+        path.write_text(data if isinstance(data, str) else yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def _refused(loader, path: Path, field: str, *needles: str) -> str:
+    """``loader(path)`` raises a one-line ParameterError on ``field`` naming ``path``."""
+    with pytest.raises(ParameterError) as info:
+        loader(path)
+    msg = str(info.value)
+    assert info.value.field == field, msg
+    assert "\n" not in msg and str(path) in msg
+    for needle in needles:
+        assert needle in msg, msg
+    return msg
+
+
+def _vehicle(name: str = "table_8_1") -> dict:
+    return yaml.safe_load((VEHICLE_DIR / f"{name}.yaml").read_text())
+
+
+def _maneuver(name: str) -> dict:
+    return yaml.safe_load((SHIPPED / "maneuvers" / f"{name}.yaml").read_text())
+
+
+def _cli(capsys, *argv: str) -> tuple[int, str]:
+    code = main(list(argv))
+    return code, capsys.readouterr().err
+
+
+def _one_line_error(code: int, err: str, command: str, *needles: str) -> None:
+    lines = err.strip().splitlines()
+    assert code == 2, err
+    assert len(lines) == 1 and lines[0].startswith(f"fourws {command}: error: "), err
+    assert "Traceback" not in err
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+
+
+# ------------------------------------------------------------------------- strict YAML
+
+def test_duplicate_key_named_with_both_lines(tmp_path):
+    """YAML forbids duplicate keys (1.2 spec, 3.2.1.1); PyYAML kept the last value."""
+    text = (VEHICLE_DIR / "table_5_1.yaml").read_text()
+    lines = text.splitlines()
+    first = next(i for i, line in enumerate(lines) if line.strip().startswith("mass_kg:"))
+    lines.insert(first + 1, "  mass_kg: 1.0")
+    path = _write(tmp_path, "\n".join(lines) + "\n")
+    _refused(load_vehicle, path, "mass_kg", "duplicate key",
+             f"line {first + 2}", f"first at line {first + 1}")
+
+
+def test_yaml_1_2_numbers_are_floats(tmp_path):
+    """YAML 1.2 core schema floats (1e-3, 1E5, 2.0e3, .5) load as the numbers Python reads
+    from the same text; quoted, they stay strings; dates are strings."""
+    forms = ["1e-3", "1E5", "2.0e3", ".5", "-1.5e-2", "+3e0", "6.02e+23"]
+    text = "\n".join(f"k{i}: {f}" for i, f in enumerate(forms)) + "\nq: '1e-3'\nd: 2024-01-01\n"
+    data = config_yaml.parse_yaml(text)
+    assert [data[f"k{i}"] for i in range(len(forms))] == [float(f) for f in forms]
+    assert data["q"] == "1e-3" and data["d"] == "2024-01-01"
+    # a vehicle written with exponents loads the numbers of the shipped file
+    body = (VEHICLE_DIR / "table_5_1.yaml").read_text()
+    body = body.replace("mass_kg: 1298.9", "mass_kg: 1.2989e3")
+    body = body.replace("relaxation_length_m: 0.414", "relaxation_length_m: 414e-3")
+    v = load_vehicle(_write(tmp_path, body))
+    assert v.chassis.mass_kg == 1298.9 and v.tire.relaxation_length_m == 0.414
+
+
+def test_shipped_files_load_as_plain_yaml_1_1_reads_them():
+    """Every shipped config file gives the strict reader exactly what PyYAML's safe_load
+    gives (they use no form where YAML 1.1 and 1.2 differ): the paper's vehicles load
+    unchanged."""
+    files = sorted(SHIPPED.glob("*/*.yaml"))
+    assert len(files) >= 20
+    for path in files:
+        assert config_yaml.read_yaml(path) == yaml.safe_load(path.read_text()), path
+
+
+def test_alias_bomb_refused(tmp_path):
+    """Nine nested anchors of nine aliases each ("billion laughs", 9^9 strings) in a file of
+    under 1.5 kB: refused at the expansion bound, not expanded."""
+    text = 'name: x\nl0: &l0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]\n'
+    for k in range(1, 9):
+        text += f"l{k}: &l{k} [" + ", ".join([f"*l{k - 1}"] * 9) + "]\n"
+    assert len(text) < 1500
+    path = _write(tmp_path, text)
+    _refused(config_yaml.read_yaml, path, "<file>",
+             f"more than {config_yaml.MAX_NODES} values once aliases are expanded")
+    # a few aliases that share a value are fine: each use is the same number
+    ok = config_yaml.parse_yaml("a: &u 23.6\nb: *u\nc: [*u, *u]\n")
+    assert ok == {"a": 23.6, "b": 23.6, "c": [23.6, 23.6]}
+    with pytest.raises(ParameterError, match="recursive alias"):
+        config_yaml.parse_yaml("a: &a [1, *a]\n")
+    with pytest.raises(ParameterError, match="aliases"):
+        config_yaml.parse_yaml("a: &a 1\nb: [" + ", ".join(["*a"] * 101) + "]\n")
+
+
+@pytest.mark.parametrize("kind", ["binary", "utf16", "latin1", "nul"])
+def test_not_utf8_text_is_one_line(tmp_path, kind):
+    """Binary, UTF-16, Latin-1 and NUL-carrying files: one line naming the file (was a
+    UnicodeDecodeError traceback)."""
+    text = (VEHICLE_DIR / "table_5_1.yaml").read_text()
+    data = {"binary": b"\x89PNG\r\n\x1a\n" + bytes(range(256)),
+            "utf16": text.encode("utf-16"),
+            "latin1": ("# r\u00e9glage\n" + text).encode("latin-1"),
+            "nul": text.encode()[:100] + b"\x00" + text.encode()[100:]}[kind]
+    _refused(load_vehicle, _write(tmp_path, data), "<file>")
+
+
+def test_utf8_byte_order_mark_accepted(tmp_path):
+    text = (VEHICLE_DIR / "table_5_1.yaml").read_text()
+    path = _write(tmp_path, "\ufeff".encode() + text.encode())
+    assert load_vehicle(path).to_dict() == load_vehicle("table_5_1").to_dict()
+
+
+def test_size_depth_and_key_limits(tmp_path):
+    big = "name: x\n" + "#" * config_yaml.MAX_FILE_BYTES + "\n"
+    _refused(config_yaml.read_yaml, _write(tmp_path, big), "<file>",
+             f"larger than {config_yaml.MAX_FILE_BYTES} bytes")
+    deep = "a: " + "[" * (config_yaml.MAX_DEPTH + 1) + "]" * (config_yaml.MAX_DEPTH + 1)
+    _refused(config_yaml.read_yaml, _write(tmp_path, deep), "<file>",
+             f"deeper than {config_yaml.MAX_DEPTH} levels")
+    _refused(config_yaml.read_yaml, _write(tmp_path, "name: x\n1: y\n"), "<file>",
+             "key '1' is not a string", "line 2")
+    # a device that never ends is read only up to the bound
+    with pytest.raises(ParameterError, match="larger than"):
+        config_yaml.read_yaml("/dev/zero")
+
+
+def test_invalid_yaml_is_one_line_with_position(tmp_path):
+    path = _write(tmp_path, "name: x\nchassis: {mass_kg: 1\n  yaw: [\n")
+    msg = _refused(load_vehicle, path, "<file>", "not valid YAML", "line ")
+    assert "column" in msg
+
+
+@pytest.mark.parametrize("key", ["chassis", "axle_tires"])
+def test_null_required_subsystem(tmp_path, key):
+    data = _vehicle("table_5_1")
+    data[key] = None
+    _refused(load_vehicle, _write(tmp_path, data), key, "null")
+
+
+def test_null_optional_subsystem_is_absent(tmp_path):
+    data = _vehicle("table_8_1")
+    data["roll"] = None
+    v = load_vehicle(_write(tmp_path, data))
+    assert v.roll is None and v.chassis == load_vehicle("table_8_1").chassis
+
+
+@pytest.mark.parametrize("key,value", [("description", ["a", "list"]), ("name", 7),
+                                       ("tire", "sti")])
+def test_wrong_type_is_one_line(tmp_path, key, value):
+    data = _vehicle("table_8_1")
+    data[key] = value
+    _refused(load_vehicle, _write(tmp_path, data), key)
+
+
+# ---------------------------------------------------------------- plausibility: vehicles
+
+ABSURD_VEHICLE = [  # issue 9's list
+    ("chassis", "mass_kg", 1e300),
+    ("tire", "friction_coefficient", 1e9),
+    ("body", "wheel_radius_m", 1e-9),
+    ("body", "cg_height_m", 1000.0),
+    ("body", "wheel_spin_inertia_kgm2", 1e-12),
+]
+
+
+@pytest.mark.parametrize("sub,name,value", ABSURD_VEHICLE)
+def test_absurd_vehicle_value_refused_with_its_bounds(tmp_path, sub, name, value):
+    from fourws_sim import params
+
+    cls = params._SUBSYSTEMS[sub]
+    low, high = _bounds(cls, name)
+    assert not low <= value <= high
+    data = _vehicle("table_8_1")
+    data[sub][name] = value
+    _refused(load_vehicle, _write(tmp_path, data), f"{sub}.{name}",
+             f"plausible range [{low:g}, {high:g}]", UNCHECKED_KEY)
+
+
+def test_unchecked_fields_lift_a_bound_and_round_trip(tmp_path):
+    """A 250-t mining truck is beyond the 100-t bound: listing the field accepts it (and the
+    list travels with the vehicle into a run record); sign checks still apply."""
+    data = _vehicle("table_5_1")
+    data["chassis"]["mass_kg"] = 2.5e5
+    data["chassis"]["yaw_inertia_kgm2"] = 1.5e6
+    path = _write(tmp_path, data)
+    _refused(load_vehicle, path, "chassis.mass_kg", "plausible range")
+    data[UNCHECKED_KEY] = ["chassis.mass_kg"]
+    v = load_vehicle(_write(tmp_path, data))
+    assert v.chassis.mass_kg == 2.5e5
+    assert v.to_dict()[UNCHECKED_KEY] == ["chassis.mass_kg"]
+    from fourws_sim.params import vehicle_from_mapping
+    assert vehicle_from_mapping(v.to_dict()).to_dict() == v.to_dict()
+    data["chassis"]["mass_kg"] = -1.0
+    _refused(load_vehicle, _write(tmp_path, data), "chassis.mass_kg", "must be > 0")
+    data["chassis"]["mass_kg"] = 2.5e5
+    data[UNCHECKED_KEY] = ["chassis.mass_lb"]
+    _refused(load_vehicle, _write(tmp_path, data), UNCHECKED_KEY, "chassis.mass_lb")
+
+
+def test_every_number_field_declares_its_bounds():
+    """Each number field of every vehicle subsystem, maneuver type and driver has its
+    plausibility range declared next to it, and every shipped file lies inside."""
+    from fourws_sim import drivers, params
+
+    classes = [*params._SUBSYSTEMS.values(), *MANEUVER_TYPES.values(), drivers.SpeedHoldSpec,
+               drivers.PathDriverSpec, drivers.TrackingDriverSpec]
+    checked = 0
+    for cls in classes:
+        for f in dataclasses.fields(cls):
+            if "check" in f.metadata:
+                low, high = f.metadata["bounds"]
+                assert low <= high, (cls.__name__, f.name)
+                checked += 1
+    assert checked > 100
+    for name in available_vehicles():
+        assert not load_vehicle(name).unchecked_fields
+
+
+def test_scale_car_and_heavy_truck_are_plausible(tmp_path):
+    """The bounds span a 1:10 scale car (3 kg, 5 cm wheels, I_w 1e-4 kg m^2) and a 40-t
+    truck; the loaded values are the file's and the understeer gradient the analytic
+    m/L (b/Cf - a/Cr)."""
+    cars = {
+        "scale": {"chassis": {"mass_kg": 3.0, "yaw_inertia_kgm2": 0.05,
+                              "cg_to_front_axle_m": 0.15, "cg_to_rear_axle_m": 0.18},
+                  "axle_tires": {"cornering_stiffness_front_n_per_rad": 60.0,
+                                 "cornering_stiffness_rear_n_per_rad": 70.0},
+                  "body": {"track_front_m": 0.25, "track_rear_m": 0.25, "cg_height_m": 0.06,
+                           "roll_centre_height_front_m": 0.02,
+                           "roll_centre_height_rear_m": 0.02, "unsprung_cg_height_m": 0.05,
+                           "wheel_radius_m": 0.05, "wheel_spin_inertia_kgm2": 1e-4}},
+        "truck": {"chassis": {"mass_kg": 40000.0, "yaw_inertia_kgm2": 4.5e5,
+                              "cg_to_front_axle_m": 3.0, "cg_to_rear_axle_m": 2.5},
+                  "axle_tires": {"cornering_stiffness_front_n_per_rad": 5e5,
+                                 "cornering_stiffness_rear_n_per_rad": 1.2e6},
+                  "steering": {"ratio": 25.0}},
+    }
+    for name, data in cars.items():
+        v = load_vehicle(_write(tmp_path, {"name": name, **data}, f"{name}.yaml"))
+        c, t = data["chassis"], data["axle_tires"]
+        length = c["cg_to_front_axle_m"] + c["cg_to_rear_axle_m"]
+        k_us = c["mass_kg"] / length * (
+            c["cg_to_rear_axle_m"] / t["cornering_stiffness_front_n_per_rad"]
+            - c["cg_to_front_axle_m"] / t["cornering_stiffness_rear_n_per_rad"])
+        assert v.understeer_gradient_rad_per_mps2 == pytest.approx(k_us, rel=1e-12)
+
+
+def test_sprung_mass_above_total_mass_refused(tmp_path):
+    data = _vehicle("table_8_1")
+    data["roll"]["sprung_mass_kg"] = data["chassis"]["mass_kg"] * 1.01
+    _refused(load_vehicle, _write(tmp_path, data), "roll.sprung_mass_kg", "exceeds")
+
+
+def test_wheel_too_light_for_its_tire_refused_by_the_8dof():
+    """RK4's real stability bound |lambda dt| <= 2.79 (1.5 with margin) on the wheel-spin mode
+    lambda = -R^2 C_s / (I_w v): the 8-DOF model refuses a wheel whose slip floor
+    v = R^2 C_s dt / (1.5 I_w) exceeds MAX_SLIP_FLOOR_MPS, and accepts it just below."""
+    from fourws_sim.models import eightdof
+    from fourws_sim.simulator import Simulator
+
+    car = load_vehicle("table_8_1")
+    body = car.body
+    params = eightdof.params_for(car)
+    # the paper's wheel (2.03 kg m^2) needs no raised floor
+    assert params.arr[eightdof.PARAM.V_MIN] == eightdof.V_MIN_DEFAULT_MPS
+    # the I_w at which the floor reaches the limit, from the floor formula of the shipped car
+    m, g = car.chassis.mass_kg, 9.80665
+    a, b = car.chassis.cg_to_front_axle_m, car.chassis.cg_to_rear_axle_m
+    fz_max = 1.5 * m * g * max(a, b) / (2.0 * (a + b))
+    module = eightdof._tire_module(car, None)[1]
+    c_s = max(eightdof._longitudinal_stiffness(module, params.coeffs_front, fz_max, 1.0),
+              eightdof._longitudinal_stiffness(module, params.coeffs_rear, fz_max, 1.0))
+    i_limit = body.wheel_radius_m ** 2 * c_s * 1e-3 / (1.5 * eightdof.MAX_SLIP_FLOOR_MPS)
+    light = dataclasses.replace(car, body=dataclasses.replace(
+        body, wheel_spin_inertia_kgm2=0.9 * i_limit))
+    with pytest.raises(ParameterError, match="body.wheel_spin_inertia_kgm2.*slip floor"):
+        Simulator(light)
+    ok = dataclasses.replace(car, body=dataclasses.replace(
+        body, wheel_spin_inertia_kgm2=1.1 * i_limit))
+    sim = Simulator(ok)
+    assert sim._p.arr[eightdof.PARAM.V_MIN] == pytest.approx(
+        body.wheel_radius_m ** 2 * c_s * 1e-3 / (1.5 * 1.1 * i_limit), rel=1e-9)
+
+
+# --------------------------------------------------------------- plausibility: maneuvers
+
+def test_steer_amplitude_bounds(tmp_path):
+    data = _maneuver("step_steer_85kmh")
+    data["amplitude_rad"] = 1e300
+    _refused(load_maneuver_spec, _write(tmp_path, data), "amplitude_rad", "plausible")
+    data["amplitude_rad"] = 1.2 * MAX_ROAD_WHEEL_ANGLE_RAD  # road-wheel input
+    _refused(load_maneuver_spec, _write(tmp_path, data), "amplitude_rad",
+             f"plausible {MAX_ROAD_WHEEL_ANGLE_RAD:g} rad")
+    # a hand-wheel angle: plausible as such, but on table_8_1 (ratio 16.3) 18 rad is 1.10 rad
+    # at the road wheels
+    data.update(steer_input="steering_wheel", amplitude_rad=18.0)
+    spec = load_maneuver_spec(_write(tmp_path, data))
+    car = load_vehicle("table_8_1")
+    with pytest.raises(ParameterError, match=f"{18.0 / car.steering.ratio:.4g} rad"):
+        make_maneuver(spec, car)
+    data["amplitude_rad"] = 3.14  # the slow ramp's half turn: 0.19 rad at the road wheels
+    make_maneuver(load_maneuver_spec(_write(tmp_path, data)), car)
+
+
+def test_frequency_bounds_and_control_rate_nyquist(tmp_path):
+    """A 1 MHz sine is refused by the maneuver bound; below it, the scenario refuses a sine
+    at or above the control rate's Nyquist frequency 1/(2 Tc) (hard: unchecked_fields does
+    not lift it) and accepts one just below."""
+    data = _maneuver("sine")
+    data["frequency_hz"] = 1e6
+    _refused(load_maneuver_spec, _write(tmp_path, data), "frequency_hz",
+             f"[0.001, {MAX_STEER_FREQUENCY_HZ:g}]")
+    scenario = yaml.safe_load((SHIPPED / "scenarios" / "default.yaml").read_text())
+    scenario["control_period_s"] = 0.05  # 20 Hz control: Nyquist 10 Hz
+    scenario["state_period_s"] = 0.05
+    for f_hz, ok in ((10.0, False), (9.9, True)):
+        data.update(frequency_hz=f_hz, start_s=0.5, duration_s=2.0)
+        scenario["maneuver"] = data
+        path = _write(tmp_path, scenario, "scenario.yaml")
+        if ok:
+            assert load_scenario(path).maneuver.params.frequency_hz == f_hz
+        else:
+            _refused(load_scenario, path, "maneuver.frequency_hz", "Nyquist frequency 10 Hz")
+    data["frequency_hz"] = 60.0  # beyond the 20 Hz bound, lifted; above 100 Hz's Nyquist
+    data[UNCHECKED_KEY] = ["frequency_hz"]
+    scenario.update(control_period_s=0.01, state_period_s=0.01, maneuver=data)
+    _refused(load_scenario, _write(tmp_path, scenario, "scenario.yaml"),
+             "maneuver.frequency_hz", "Nyquist frequency 50 Hz")
+
+
+def test_duration_grid_and_sample_limits(tmp_path):
+    data = _maneuver("step_steer_85kmh")
+    data["duration_s"] = 1e9
+    _refused(load_maneuver_spec, _write(tmp_path, data), "duration_s", f"{MAX_DURATION_S:g}")
+    data["duration_s"] = 5.0
+    data["start_s"] = 6.0  # after the end: the step would never be applied
+    _refused(load_maneuver_spec, _write(tmp_path, data), "start_s", "never be applied")
+    dlc = _maneuver("double_lane_change")
+    dlc["path_step_m"] = 1e-5
+    _refused(load_maneuver_spec, _write(tmp_path, dlc), "path_step_m", "plausible")
+    dlc[UNCHECKED_KEY] = ["path_step_m"]  # the grid limit is hard
+    points = (dlc["approach_m"] + 61.0 + dlc["path_runout_m"]) / 1e-5
+    _refused(load_maneuver_spec, _write(tmp_path, dlc), "path_step_m",
+             f"{points:.3g} points", str(MAX_PATH_POINTS))
+    rnd = _maneuver("random_steer")
+    rnd.update(length_s=3000.0, sample_rate_hz=5000.0, duration_s=3001.0)
+    _refused(load_maneuver_spec, _write(tmp_path, rnd), "length_s",
+             f"{3000.0 * 5000.0:.3g} samples", str(MAX_RANDOM_SAMPLES))
+    speedy = _maneuver("step_steer_85kmh")
+    speedy["initial_speed_mps"] = 1e6
+    _refused(load_maneuver_spec, _write(tmp_path, speedy), "initial_speed_mps",
+             f"{MAX_SPEED_MPS:g}")
+
+
+def test_scenario_step_count_limit(tmp_path):
+    scenario = yaml.safe_load((SHIPPED / "scenarios" / "default.yaml").read_text())
+    man = _maneuver("step_steer_85kmh")
+    man["duration_s"] = 3000.0
+    scenario.update(maneuver=man, integration_step_s=1e-5, control_period_s=1e-4,
+                    state_period_s=1e-4)
+    from fourws_run.scenario import MAX_RUN_STEPS
+    _refused(load_scenario, _write(tmp_path, scenario), "maneuver.duration_s",
+             f"{3000.0 / 1e-5:.3g} integration steps", str(MAX_RUN_STEPS))
+
+
+# ------------------------------------------------------------------------- command line
+
+@pytest.mark.parametrize("speed", ["1e6", "0", "-85", "nan", "inf"])
+def test_linear_speed_bounds(capsys, speed):
+    code, err = _cli(capsys, "linear", "--vehicle", "table_4_4", "--model", "2dof", "--law",
+                     "sol1", f"--speed-kmh={speed}")
+    _one_line_error(code, err, "linear", "--speed-kmh", f"{MAX_SPEED_MPS * 3.6:g}] km/h")
+
+
+def test_unwritable_outputs_are_one_line(capsys, tmp_path):
+    """A plot path under a regular file (ENOTDIR, whatever the user's rights: tests may run as
+    root, for whom a read-only folder is writable) and a full disk (a .png link to /dev/full,
+    ENOSPC)."""
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    base = ["linear", "--vehicle", "table_4_4", "--model", "2dof", "--law", "sol1",
+            "--speed-kmh", "60"]
+    code, err = _cli(capsys, *base, "--bode-plot", str(blocker / "bode.png"))
+    _one_line_error(code, err, "linear", str(blocker / "bode.png"), "Not a directory")
+    if os.path.exists("/dev/full"):
+        full = tmp_path / "full.png"
+        full.symlink_to("/dev/full")
+        code, err = _cli(capsys, *base, "--bode-plot", str(full))
+        _one_line_error(code, err, "linear", "No space left on device", str(full))
+    code, err = _cli(capsys, "tire-curves", "--vehicle", "table_8_1", "--png",
+                     str(blocker / "c.png"))
+    _one_line_error(code, err, "tire-curves", "Not a directory")
+
+
+@pytest.fixture(scope="module")
+def small_bag(tmp_path_factory) -> Path:
+    """A recorded-like bag of 200 states at 10 ms (2 s)."""
+    from fourws_analysis import bag as B
+
+    path = tmp_path_factory.mktemp("bag") / "run"
+    store = B.typestore()
+    mt = B.TOPIC_TYPES[B.TOPIC_STATE]
+    with B.BagWriter(path) as bag:
+        bag.write_run_config({"maneuver": {"type": "step_steer"}, "law": "fws"})
+        for i in range(200):
+            t = 0.01 * i
+            msg = B.make_message(mt, header={"stamp": B.stamp(t), "frame_id": "base_link"},
+                                 step=i, model="2dof", yaw_rate_radps=math.sin(t))
+            bag.write_raw(B.TOPIC_STATE, store.serialize_cdr(msg, mt), int(t * 1e9) + 1000)
+    return path
+
+
+@pytest.mark.parametrize("where,factor,ok", [("low", 1e-5, False), ("low", 0.99, False),
+                                             ("low", 1.01, True), ("high", 0.99, True),
+                                             ("high", 1.01, False), ("high", 1e6, False)])
+def test_resampling_step_bounds(small_bag, where, factor, ok):
+    """dt within [state period / MAX_UPSAMPLING, span / (MIN_RESAMPLED_POINTS - 1)], with the
+    period and span of the bag's stamps (10 ms over 1.99 s)."""
+    from fourws_analysis import bag as B
+
+    run = B.load_bag(small_bag)
+    t = run.topics[B.TOPIC_STATE].time_s
+    bounds = {"low": float(np.median(np.diff(t))) / B.MAX_UPSAMPLING,
+              "high": float(t[-1] - t[0]) / (B.MIN_RESAMPLED_POINTS - 1)}
+    dt = bounds[where] * factor
+    if ok:
+        uni = B.resample(run, dt)
+        assert uni.time_s.size == int(math.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+    else:
+        with pytest.raises(ParameterError, match="dt_s.*outside"):
+            B.resample(run, dt)
+
+
+@pytest.mark.parametrize("dt", ["1e-9", "1e6", "nan", "-1"])
+def test_analyze_dt_bounds_one_line(capsys, small_bag, dt):
+    code, err = _cli(capsys, "analyze", str(small_bag), "--quiet", "--no-sweep", f"--dt={dt}")
+    _one_line_error(code, err, "analyze")
+
+
+@pytest.mark.parametrize("cut", [0, 8, 9, 100])
+def test_truncated_bag_one_line(capsys, small_bag, tmp_path, cut):
+    import shutil
+
+    bag = tmp_path / "cut"
+    shutil.copytree(small_bag, bag)
+    mcap = next(bag.glob("*.mcap"))
+    mcap.write_bytes(mcap.read_bytes()[:cut])
+    code, err = _cli(capsys, "analyze", str(bag), "--quiet", "--no-sweep")
+    _one_line_error(code, err, "analyze", "truncated or corrupt", str(bag))
+
+
+def test_report_folder_unwritable_one_line(capsys, small_bag, tmp_path):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    code, err = _cli(capsys, "analyze", str(small_bag), "--quiet", "--no-sweep", "--report",
+                     str(blocker / "report"))
+    _one_line_error(code, err, "analyze", "Not a directory")
+
+
+# ---------------------------------------------------------------------------------- nodes
+
+def _node(name: str, *ros_args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "fourws_cli.main", "node", name, "--ros-args",
+                           *ros_args], capture_output=True, text=True, errors="replace",
+                          timeout=120, env=dict(os.environ))
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_node_params_file_missing_or_binary(tmp_path):
+    """rcl refuses the file (was an RCLError traceback): exit 2 and one error line of ours
+    naming the file."""
+    binary = _write(tmp_path, b"\x89PNG\r\n\x1a\n" + bytes(range(256)), "params.yaml")
+    for path in (tmp_path / "missing.yaml", binary):
+        res = _node("controller", "--params-file", str(path))
+        ours = [line for line in res.stderr.splitlines() if line.startswith("[fourws_")]
+        assert res.returncode == 2, res.stderr
+        assert "Traceback" not in res.stderr
+        assert len(ours) == 1 and str(path) in ours[0] and "cannot start" in ours[0]
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_live_belief_vehicle_binary_or_utf16_is_rejected(tmp_path):
+    """A live ``belief_vehicle`` naming a binary or UTF-16 file is refused by the controller's
+    on-set callback (a FourwsError) and the running law is kept: same gains as before."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.parameter import Parameter
+
+    from fourws_ros.controller_node import ControllerNode
+
+    ctx = Context()
+    rclpy.init(args=[], context=ctx)
+    original = rclpy.node.Node.__init__
+
+    def init(self, name, **kwargs):
+        kwargs.setdefault("context", ctx)
+        original(self, name, **kwargs)
+
+    rclpy.node.Node.__init__ = init
+    try:
+        node = ControllerNode()
+    finally:
+        rclpy.node.Node.__init__ = original
+    try:
+        gains = np.array(node.law.gains(23.6))
+        text = (VEHICLE_DIR / "table_5_1.yaml").read_text()
+        for name, data in (("bin.yaml", bytes(range(256))), ("u16.yaml", text.encode("utf-16"))):
+            path = _write(tmp_path, data, name)
+            res = node.set_parameters([Parameter("belief_vehicle", value=str(path))])[0]
+            assert not res.successful and str(path) in res.reason
+            assert node.get_parameter("belief_vehicle").value == ""
+            np.testing.assert_array_equal(node.law.gains(23.6), gains)
+    finally:
+        node.destroy_node()
+        ctx.try_shutdown()
+
+
+@pytest.mark.parametrize("component,value", [("V", 1e150), ("PHI", 1e200)])
+def test_diverging_8dof_state_is_a_non_finite_error(component, value):
+    """A state that overflows inside an RK4 stage: NonFiniteError (the reference tire code
+    that names the component raised a bare 'math domain error' before), and the simulator
+    keeps the last finite state, short of the 10 steps asked for."""
+    from fourws_sim.errors import NonFiniteError
+    from fourws_sim.models.eightdof import STATE
+    from fourws_sim.simulator import Inputs, Simulator
+
+    sim = Simulator("table_8_1")
+    sim.reset(speed_mps=10.0)
+    x = sim.state
+    x[STATE[component]] = value
+    sim.state = x
+    with pytest.raises(NonFiniteError, match="became non-finite"):
+        sim.step(Inputs(), 10)
+    assert np.all(np.isfinite(sim.state)) and sim.outputs()["step"] < 10
