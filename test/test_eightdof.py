@@ -44,14 +44,19 @@ def vehicle() -> Vehicle:
 
 
 def variant(v: Vehicle, **changes: Any) -> Vehicle:
-    """Copy of ``v`` with ``subsystem__field=value`` changes (``sti__g1`` for tire.sti)."""
+    """Copy of ``v`` with ``subsystem__field=value`` changes (``sti__g1`` for tire.sti); the
+    changed fields are exempt from the plausibility bounds (a variant may be deliberately
+    unreal, e.g. a roll arm of 0.1 mm to remove roll)."""
     d = v.to_dict()
+    lifted = set(d.get("unchecked_fields", []))
     for path, value in changes.items():
         sub, key = path.split("__")
         if sub == "sti":
             d["tire"]["sti"][key] = value
         else:
             d[sub][key] = value
+        lifted.add(f"tire.sti.{key}" if sub == "sti" else f"{sub}.{key}")
+    d["unchecked_fields"] = sorted(lifted)
     return vehicle_from_mapping(d, f"{v.name} variant")
 
 

@@ -53,11 +53,16 @@ SLIP_STEP = 1.0e-5
 
 
 def variant(v: Vehicle, **changes: Any) -> Vehicle:
-    """Copy of ``v`` with ``subsystem__field=value`` changes (``sti__g1`` for tire.sti)."""
+    """Copy of ``v`` with ``subsystem__field=value`` changes (``sti__g1`` for tire.sti); the
+    changed fields are exempt from the plausibility bounds (a variant may be deliberately
+    unreal, e.g. a roll arm of 0.1 mm to remove roll, a 1e-12 kg m^2 wheel)."""
     d = v.to_dict()
+    lifted = set(d.get("unchecked_fields", []))
     for path, value in changes.items():
         sub, key = path.split("__")
         (d["tire"]["sti"] if sub == "sti" else d[sub])[key] = value
+        lifted.add(f"tire.sti.{key}" if sub == "sti" else f"{sub}.{key}")
+    d["unchecked_fields"] = sorted(lifted)
     return vehicle_from_mapping(d, f"{v.name} variant")
 
 

@@ -112,7 +112,7 @@ def test_yaml_1_2_numbers_are_floats(tmp_path):
     body = body.replace("mass_kg: 1298.9", "mass_kg: 1.2989e3")
     body = body.replace("relaxation_length_m: 0.414", "relaxation_length_m: 414e-3")
     v = load_vehicle(_write(tmp_path, body))
-    assert v.chassis.mass_kg == 1298.9 and v.tire.relaxation_length_m == 0.414
+    assert v.chassis.mass_kg == 1298.9 and v.tire.relaxation_length_front_m == 0.414
 
 
 def test_shipped_files_load_as_plain_yaml_1_1_reads_them():
@@ -301,37 +301,6 @@ def test_sprung_mass_above_total_mass_refused(tmp_path):
     data = _vehicle("table_8_1")
     data["roll"]["sprung_mass_kg"] = data["chassis"]["mass_kg"] * 1.01
     _refused(load_vehicle, _write(tmp_path, data), "roll.sprung_mass_kg", "exceeds")
-
-
-def test_wheel_too_light_for_its_tire_refused_by_the_8dof():
-    """RK4's real stability bound |lambda dt| <= 2.79 (1.5 with margin) on the wheel-spin mode
-    lambda = -R^2 C_s / (I_w v): the 8-DOF model refuses a wheel whose slip floor
-    v = R^2 C_s dt / (1.5 I_w) exceeds MAX_SLIP_FLOOR_MPS, and accepts it just below."""
-    from fourws_sim.models import eightdof
-    from fourws_sim.simulator import Simulator
-
-    car = load_vehicle("table_8_1")
-    body = car.body
-    params = eightdof.params_for(car)
-    # the paper's wheel (2.03 kg m^2) needs no raised floor
-    assert params.arr[eightdof.PARAM.V_MIN] == eightdof.V_MIN_DEFAULT_MPS
-    # the I_w at which the floor reaches the limit, from the floor formula of the shipped car
-    m, g = car.chassis.mass_kg, 9.80665
-    a, b = car.chassis.cg_to_front_axle_m, car.chassis.cg_to_rear_axle_m
-    fz_max = 1.5 * m * g * max(a, b) / (2.0 * (a + b))
-    module = eightdof._tire_module(car, None)[1]
-    c_s = max(eightdof._longitudinal_stiffness(module, params.coeffs_front, fz_max, 1.0),
-              eightdof._longitudinal_stiffness(module, params.coeffs_rear, fz_max, 1.0))
-    i_limit = body.wheel_radius_m ** 2 * c_s * 1e-3 / (1.5 * eightdof.MAX_SLIP_FLOOR_MPS)
-    light = dataclasses.replace(car, body=dataclasses.replace(
-        body, wheel_spin_inertia_kgm2=0.9 * i_limit))
-    with pytest.raises(ParameterError, match="body.wheel_spin_inertia_kgm2.*slip floor"):
-        Simulator(light)
-    ok = dataclasses.replace(car, body=dataclasses.replace(
-        body, wheel_spin_inertia_kgm2=1.1 * i_limit))
-    sim = Simulator(ok)
-    assert sim._p.arr[eightdof.PARAM.V_MIN] == pytest.approx(
-        body.wheel_radius_m ** 2 * c_s * 1e-3 / (1.5 * 1.1 * i_limit), rel=1e-9)
 
 
 # --------------------------------------------------------------- plausibility: maneuvers
