@@ -550,11 +550,21 @@ def read_bag(path: str | Path) -> tuple[list[RawMessage], BagCheck]:
         problems.append("no metadata.yaml (the recorder did not close the bag); "
                         "`fourws bag repair` writes it")
     if info is not None:
-        for topic, n in metadata_counts(info).items():
+        try:
+            stated = metadata_counts(info)
+        except (KeyError, TypeError, ValueError, OverflowError, AttributeError) as exc:
+            # a damaged metadata.yaml is a damaged bag, not a crash of the reader
+            problems.append(f"metadata.yaml does not list its topics as rosbag2 does "
+                            f"({type(exc).__name__}: {exc})")
+            stated = {}
+        for topic, n in stated.items():
             if counts.get(topic, 0) != n:
                 problems.append(f"{topic}: metadata.yaml says {n} messages, the file holds "
                                 f"{counts.get(topic, 0)}")
     custom = (info or {}).get("custom_data") or {}
+    if not isinstance(custom, Mapping):
+        problems.append("metadata.yaml: custom_data is not a mapping")
+        custom = {}
     text = custom.get(KEY_ACCOUNTING) or mcap_meta.get(MCAP_METADATA, {}).get("accounting")
     complete: bool | None = None
     accounting: dict[str, Any] = {}

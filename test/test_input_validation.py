@@ -470,6 +470,27 @@ def test_truncated_bag_one_line(capsys, small_bag, tmp_path, cut):
     _one_line_error(code, err, "analyze", "truncated or corrupt", str(bag))
 
 
+@pytest.mark.parametrize("damage", ["count", "binary", "custom", "cut"])
+def test_damaged_bag_metadata_one_line(capsys, small_bag, tmp_path, damage):
+    """A metadata.yaml that is not what rosbag2 writes (a count that is not a number, binary,
+    custom_data not a mapping, cut short): the bag is damaged, one line (was a KeyError,
+    TypeError or ValueError traceback)."""
+    import shutil
+
+    bag = tmp_path / "bag"
+    shutil.copytree(small_bag, bag)
+    meta = bag / "metadata.yaml"
+    text = meta.read_text()
+    assert "message_count: 200" in text and "custom_data:" in text
+    meta.write_bytes({"count": text.replace("message_count: 200", "message_count: abc").encode(),
+                      "binary": bytes(range(256)),
+                      "custom": text.replace("custom_data:", "custom_data: [1, 2]\nx_data:")
+                      .encode(),
+                      "cut": text.encode()[:text.index("topic_metadata") + 20]}[damage])
+    code, err = _cli(capsys, "analyze", str(bag), "--quiet", "--no-sweep")
+    _one_line_error(code, err, "analyze", str(bag))
+
+
 def test_report_folder_unwritable_one_line(capsys, small_bag, tmp_path):
     blocker = tmp_path / "a_file"
     blocker.write_text("x")
