@@ -237,8 +237,9 @@ class SlowRampSteerParams(RampSteerParams):
     ``|a_y| >= max_lateral_accel_mps2``, when ``|sideslip| > max_sideslip_rad`` (the car left
     the quasi-steady regime: it is spinning), or at ``duration_s``."""
 
-    max_lateral_accel_mps2: float = _spec(default=8.0, bounds=(0.01, 30.0))
-    max_sideslip_rad: float = _spec(default=0.15, bounds=(1e-3, math.pi / 2))
+    # end conditions: any small threshold is meaningful (it ends the run early on purpose)
+    max_lateral_accel_mps2: float = _spec(default=8.0, bounds=(0.0, 30.0))
+    max_sideslip_rad: float = _spec(default=0.15, bounds=(0.0, math.pi / 2))
 
 
 @dataclass(frozen=True)
@@ -438,8 +439,9 @@ class ConstantRadiusParams:
     speed_step_mps: float = _spec(default=1.0, bounds=(1e-3, MAX_SPEED_MPS))
     dwell_s: float = _spec(default=8.0, bounds=(1e-2, MAX_DURATION_S))
     direction: str = "left"
-    max_path_error_m: float = _spec(default=5.0, bounds=(1e-2, 1e3))
-    max_sideslip_rad: float = _spec(default=0.25, bounds=(1e-3, math.pi / 2))
+    # abort thresholds: any small one is meaningful (it ends the run early on purpose)
+    max_path_error_m: float = _spec(default=5.0, bounds=(0.0, 1e3))
+    max_sideslip_rad: float = _spec(default=0.25, bounds=(0.0, math.pi / 2))
 
     def _check(self, source: str | None, prefix: str,
                unchecked: frozenset[str] = frozenset()) -> None:
