@@ -52,25 +52,25 @@ def _loader_case(kind: str, target, pair: tuple[Path, Mutation]) -> None:
            mutation)
 
 
-@_settings(200)
+@_settings(150)
 @given(mutations(DIRS["vehicle"]))
 def test_vehicle_file_mutations(pair):
     _loader_case("vehicle", vehicle_target, pair)
 
 
-@_settings(120)
+@_settings(90)
 @given(mutations(DIRS["maneuver"]))
 def test_maneuver_file_mutations(pair):
     _loader_case("maneuver", maneuver_target, pair)
 
 
-@_settings(100)
+@_settings(60)
 @given(mutations(DIRS["scenario"]))
 def test_scenario_file_mutations(pair):
     _loader_case("scenario", scenario_target, pair)
 
 
-@_settings(100)
+@_settings(80)
 @given(mutations([p for p in DIRS["vehicle"] if p.stem in LINEAR_VEHICLES]),
        st.sampled_from(["2dof", "3dof"]), linear_speeds())
 def test_fourws_linear_mutations(pair, model, speed):
