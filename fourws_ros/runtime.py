@@ -54,6 +54,23 @@ def _rcl_message(exc: BaseException) -> str:
     return re.sub(r",? at \S+:\d+", "", one_line(exc)).strip() or type(exc).__name__
 
 
+def check_params_files(argv: Sequence[str]) -> None:
+    """Read every ``--params-file`` of ``argv`` with fourws's strict YAML reader before rcl
+    does: rcl keeps the last of two equal keys without a word and reads a NUL-cut file up to
+    the NUL; here either is an error naming the key or the file.
+
+    Raises
+    ------
+    fourws_sim.errors.ParameterError
+        A parameter file that is missing, not UTF-8, not valid YAML, or has a duplicate key.
+    """
+    from fourws_sim.config_yaml import read_yaml
+
+    for flag, value in zip(argv, argv[1:]):
+        if flag == "--params-file":
+            read_yaml(value)
+
+
 def make_executor(context: Any = None, message_info: bool = False) -> Any:
     """The executor the nodes use: rclpy's C++ events executor when present (lower overhead per
     callback, which bounds the lockstep rate), else the single-threaded executor.
@@ -106,12 +123,17 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     from fourws_sim.errors import FourwsError
 
     rcl_error = rclpy_implementation.RCLError
+    argv = list(args) if args is not None else list(sys.argv)
+    try:
+        check_params_files(argv)
+    except FourwsError as exc:
+        print(f"[{name}] error: {one_line(exc)}", file=sys.stderr, flush=True)
+        return EXIT_USER_ERROR
     flag = _StopFlag()
     signal.signal(signal.SIGINT, flag)
     signal.signal(signal.SIGTERM, flag)
     try:
-        rclpy.init(args=list(args) if args is not None else sys.argv,
-                   signal_handler_options=SignalHandlerOptions.NO)
+        rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     except rcl_error as exc:
         # rcl refuses the arguments: a --params-file that is missing, not YAML or not a
         # parameter file, a malformed -p or remapping

@@ -508,16 +508,20 @@ def _node(name: str, *ros_args: str) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.usefixtures("ros_domain")
-def test_node_params_file_missing_or_binary(tmp_path):
-    """rcl refuses the file (was an RCLError traceback): exit 2 and one error line of ours
-    naming the file."""
+def test_node_params_file_missing_binary_or_duplicate(tmp_path):
+    """A --params-file that is missing, binary (was an RCLError traceback) or has a key twice
+    (rcl keeps the last one without a word): exit 2 and one error line naming the file (and
+    the key), before rcl reads it."""
     binary = _write(tmp_path, b"\x89PNG\r\n\x1a\n" + bytes(range(256)), "params.yaml")
-    for path in (tmp_path / "missing.yaml", binary):
+    twice = _write(tmp_path, "fourws_controller:\n  ros__parameters:\n    law: sol1\n"
+                             "    law: fws\n", "twice.yaml")
+    for path, needle in ((tmp_path / "missing.yaml", "cannot be read"),
+                         (binary, "not a text file"), (twice, "law: duplicate key at line 4")):
         res = _node("controller", "--params-file", str(path))
         ours = [line for line in res.stderr.splitlines() if line.startswith("[fourws_")]
         assert res.returncode == 2, res.stderr
         assert "Traceback" not in res.stderr
-        assert len(ours) == 1 and str(path) in ours[0] and "cannot start" in ours[0]
+        assert len(ours) == 1 and str(path) in ours[0] and needle in ours[0], ours
 
 
 @pytest.mark.usefixtures("ros_domain")
