@@ -764,7 +764,7 @@ def plot_bode(data: BodeData | Sequence[tuple[str, BodeData]], path: str | Path,
     keys : list of str, optional
         ``"output/input"`` keys to draw (default: every key of the first response).
     """
-    import matplotlib
+    import matplotlib  # here, not at the top: only the plots need it, and it is slow to load
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -49,7 +49,7 @@ import numpy as np
 from fourws_control.bicycle import bicycle
 from fourws_control.signals import Signal, signal_map
 from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
-from fourws_sim.params import Vehicle
+from fourws_sim.params import Actuators, Vehicle
 
 #: Speed below which the gains fade linearly to zero at standstill, m/s. Parking-lot speeds
 #: (~7 km/h) keep full gains; walking pace and below fades out.
@@ -272,8 +272,6 @@ class RearSteerActuator:
     def __init__(self, vehicle: Vehicle | None = None, *, angle_limit_rad: float | None = None,
                  rate_limit_rad_per_s: float | None = None,
                  initial_angle_rad: float = 0.0) -> None:
-        from fourws_sim.params import Actuators
-
         act = vehicle.actuators if vehicle is not None else Actuators()
         self.angle_limit_rad = check_option(
             "angle_limit_rad",

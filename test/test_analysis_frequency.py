@@ -84,6 +84,22 @@ def test_steady_state_gain_of_linear_system_is_textbook_yaw_gain() -> None:
         pytest.approx(SPEED * expected, rel=1e-10)
 
 
+
+def test_dc_gain_of_a_singular_model_is_its_low_frequency_limit() -> None:
+    """A model with a mode the input reaches but no output sees (x1' = x2, like the 8-DOF's
+    heading) has a singular A: the DC gain is the limit of the response, here of
+    y/u = 1/(s + 2), 0.5 (within (2 pi DC_LIMIT_HZ / 2)^2 ~ 1e-11). A missing output is
+    named with the model's outputs."""
+    system = control.ss([[0.0, 1.0], [0.0, -2.0]], [[0.0], [1.0]], [[0.0, 1.0]], [[0.0]],
+                        inputs=[U.ROAD_WHEEL.channel], outputs=["yaw_rate_radps"],
+                        name="integrator and lag")
+    assert F.dc_gain(system, "yaw_rate_radps") == pytest.approx(0.5, rel=1e-10)
+    fr = F.model_response(system, "yaw_rate_radps", np.array([1.0]))
+    assert fr.response[0] == pytest.approx(1.0 / (2j * math.pi + 2.0), rel=1e-12)
+    assert fr.label == "integrator and lag" and fr.input == U.ROAD_WHEEL.channel
+    with pytest.raises(B.MetricUnavailableError, match="no output 'roll_rad'.*yaw_rate_radps"):
+        F.dc_gain(system, "roll_rad")
+
 def test_metrics_of_second_order_system() -> None:
     """Resonance, bandwidth and phase of wn^2/(s^2 + 2 zeta wn s + wn^2) match the analytic
     formulas: peak 1/(2 zeta sqrt(1-zeta^2)) at wn sqrt(1-2 zeta^2); -3 dB at
