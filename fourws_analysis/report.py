@@ -162,7 +162,7 @@ def metric_tables(runs: Sequence[RunAnalysis]) -> list[tuple[str, list[TableRow]
               lambda r: _eig_list(r.modes.eigenvalues) or None)]
     for name in ("2dof", "3dof", "8dof-lin"):
         specs.append((f"{MODEL_NAMES[name]} at the run speed", "1/s",
-                      lambda r, n=name: _eig_list(r.models[n].eigenvalues) or None))
+                      lambda r, n=name: _eig_list(r.models[n].poles()) or None))
     # the same models as the controller closes them: command held over its period
     specs.append(("law's control period T", "s",
                   lambda r: next((v.period_s for v in r.sampled.values()), None)))

@@ -11,7 +11,8 @@ speed ``U`` (chapter 4 shows that constant gains can destabilize the vehicle):
 A law computes the gain vector :meth:`Law.gains` from its *belief* vehicle (which may differ
 from the simulated one, e.g. ``vehicle.with_axle_tires(0.6)``) and applies it to a
 :class:`LawInput`. Because every law has this form, :meth:`Law.linear_gains` can express it
-in the state/input order of any linear model, which lets the analysis close the loop exactly.
+in the state/input order of any linear model (or of the 8-DOF's linearization), which lets
+the analysis close the loop exactly.
 
 Signs follow ``docs/architecture.md``: positive steer angles turn left, ``r`` positive to the
 left, ``V`` positive to the left, roll positive right side down (the roll gains are expressed
@@ -41,14 +42,14 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from enum import IntEnum
 from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
-from fourws_control._vehicle import bicycle
+from fourws_control.bicycle import bicycle
+from fourws_control.signals import Signal, signal_map
 from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
-from fourws_sim.params import Vehicle
+from fourws_sim.params import Actuators, Vehicle
 
 #: Speed below which the gains fade linearly to zero at standstill, m/s. Parking-lot speeds
 #: (~7 km/h) keep full gains; walking pace and below fades out.
@@ -56,26 +57,6 @@ DEFAULT_MIN_SPEED_MPS = 2.0
 #: Control period a law is designed for when none is given, s: fourws' default 100 Hz loop
 #: (``control_period_s`` of ``config/scenarios/*.yaml`` and of the controller node).
 DEFAULT_CONTROL_PERIOD_S = 0.01
-
-
-class Signal(IntEnum):
-    """Signals a law may use; the order of :meth:`Law.gains`."""
-
-    DELTA_F = 0  #: front road-wheel angle delta_f, rad
-    YAW_RATE = 1  #: yaw rate r, rad/s
-    ROLL = 2  #: roll angle phi (right side down positive), rad
-    ROLL_RATE = 3  #: roll rate, rad/s
-    LATERAL_VELOCITY = 4  #: lateral velocity V of the CG in the body frame, m/s
-
-
-#: Unit of the gain on each signal (rear angle in rad per unit of the signal).
-GAIN_UNITS = {
-    Signal.DELTA_F: "rad/rad",
-    Signal.YAW_RATE: "rad/(rad/s)",
-    Signal.ROLL: "rad/rad",
-    Signal.ROLL_RATE: "rad/(rad/s)",
-    Signal.LATERAL_VELOCITY: "rad/(m/s)",
-}
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,7 +79,8 @@ class LinearGains:
     Attributes
     ----------
     model : str
-        Linear model name (``2dof``, ``2dof-free``, ``2dof-lagged``, ``3dof``).
+        Model name (``2dof``, ``2dof-free``, ``2dof-lagged``, ``3dof``, or ``8dof`` for its
+        linearization, :data:`fourws_control.signals.LINEARIZED_MODELS`).
     speed_mps : float
         Forward speed the gains belong to, m/s.
     K_x : numpy.ndarray
@@ -189,8 +171,8 @@ class Law(ABC):
     def gains(self, speed_mps: float) -> np.ndarray:
         """Gain vector in :class:`Signal` order at forward speed ``speed_mps`` (m/s).
 
-        Units per :data:`GAIN_UNITS`. Below ``min_speed_mps`` the gains of ``min_speed_mps``
-        scaled by ``max(U, 0) / min_speed_mps``.
+        Units per :data:`fourws_control.signals.GAIN_UNITS`. Below ``min_speed_mps`` the gains
+        of ``min_speed_mps`` scaled by ``max(U, 0) / min_speed_mps``.
 
         Raises
         ------
@@ -227,12 +209,14 @@ class Law(ABC):
 
     def linear_gains(self, model_name: str, vehicle: Vehicle | None = None,
                      speed_mps: float = 0.0) -> LinearGains:
-        """The law in a linear model's state/input order: ``delta_r = K_x x + K_u u``.
+        """The law in a model's state/input order: ``delta_r = K_x x + K_u u``.
 
         Parameters
         ----------
         model_name : str
-            ``2dof``, ``2dof-free``, ``2dof-lagged`` or ``3dof``.
+            ``2dof``, ``2dof-free``, ``2dof-lagged``, ``3dof`` (linear models), or ``8dof``
+            (the state and input order of its linearization; the law is linear, so its gains
+            are the same about any trim).
         vehicle : Vehicle, optional
             The model's (true) vehicle; only used to check that the model can be built.
         speed_mps : float
@@ -245,8 +229,6 @@ class Law(ABC):
         IncompatibleError
             The law uses a signal the model does not have (e.g. roll feedback on a 2-DOF).
         """
-        from fourws_control.signals import signal_map  # local: signals imports this module
-
         speed = check_speed(speed_mps)
         smap = signal_map(model_name)
         missing = [s for s in self.signals if s not in smap.available]
@@ -290,8 +272,6 @@ class RearSteerActuator:
     def __init__(self, vehicle: Vehicle | None = None, *, angle_limit_rad: float | None = None,
                  rate_limit_rad_per_s: float | None = None,
                  initial_angle_rad: float = 0.0) -> None:
-        from fourws_sim.params import Actuators
-
         act = vehicle.actuators if vehicle is not None else Actuators()
         self.angle_limit_rad = check_option(
             "angle_limit_rad",

@@ -52,8 +52,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fourws_control._vehicle import bicycle
 from fourws_control.base import Law, Signal
+from fourws_control.bicycle import bicycle
 from fourws_sim.errors import IncompatibleError
 from fourws_sim.models import roll3dof
 from fourws_sim.params import GRAVITY_MPS2, Vehicle
