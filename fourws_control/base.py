@@ -35,6 +35,16 @@ A law runs in a sampled loop: its command is computed once per control period ``
 controller node pass the loop's period through :func:`fourws_control.registry.make_loop_law`).
 Laws designed in continuous time (closed forms of chapters 4 and 6) do not use it; a law
 designed for the sampled loop (``lqr``'s default design) does.
+
+Plain functions
+---------------
+The arithmetic of a law step is written once as plain functions of floats and arrays, in the
+subset of Python that numba compiles: each law's gain schedule (:class:`GainFunction`,
+:meth:`Law.gain_function`), the low-speed fade (:func:`gain_speed`), the sum of the gained
+signals (:func:`rear_angle_of`) and the actuator's limits (:func:`actuator_step`). The
+classes here call them; the study kernels (:mod:`fourws_study.kernel`) compile the same
+functions, so a compiled closed loop performs the same float operations in the same order as
+the interpreted one.
 """
 
 from __future__ import annotations
@@ -42,7 +52,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar, Mapping
+from typing import Any, Callable, ClassVar, Mapping
 
 import numpy as np
 
@@ -104,6 +114,66 @@ class LinearGains:
         return {"model": self.model, "speed_mps": self.speed_mps,
                 "K_x": dict(zip(self.state_names, map(float, self.K_x))),
                 "K_u": dict(zip(self.input_names, map(float, self.K_u)))}
+
+
+@dataclass(frozen=True)
+class GainFunction:
+    """A law's gain schedule as a plain function of the speed and a parameter vector.
+
+    ``function(speed_mps, params, out)`` writes the gains at ``speed_mps >= min_speed_mps``
+    (m/s) in :class:`Signal` order into ``out`` (length ``len(Signal)``, zeros on entry), from
+    the law's parameter vector ``params`` (float64). It uses only float arithmetic, indexing
+    and the functions of its own module, so numba compiles it to the same operations.
+
+    Attributes
+    ----------
+    function : callable
+        ``f(speed_mps, params, out) -> None``.
+    params : numpy.ndarray
+        The law's parameters (read only), in the order ``function`` reads them.
+    """
+
+    function: Callable[[float, np.ndarray, np.ndarray], None]
+    params: np.ndarray
+
+    def __post_init__(self) -> None:
+        params = np.array(self.params, dtype=np.float64).reshape(-1)
+        params.flags.writeable = False
+        object.__setattr__(self, "params", params)
+
+    def evaluate(self, speed_mps: float) -> np.ndarray:
+        """The gains at ``speed_mps`` (m/s), :class:`Signal` order."""
+        out = np.zeros(len(Signal))
+        self.function(speed_mps, self.params, out)
+        return out
+
+
+def gain_speed(speed_mps: float, min_speed_mps: float) -> tuple[float, float]:
+    """``(design speed, scale)``: a law's gains at ``speed_mps`` are its design gains at the
+    design speed times ``scale`` -- the speed itself and 1 at or above ``min_speed_mps``,
+    else ``min_speed_mps`` and ``max(U, 0) / min_speed_mps`` (the low-speed fade of the
+    module docstring). Speeds in m/s."""
+    if speed_mps >= min_speed_mps:
+        return speed_mps, 1.0
+    return min_speed_mps, max(speed_mps, 0.0) / min_speed_mps
+
+
+def rear_angle_of(k: Any, delta_f_rad: float, yaw_rate_radps: float, roll_rad: float,
+                  roll_rate_radps: float, lateral_velocity_mps: float) -> float:
+    """The rear road-wheel angle (rad) of gains ``k`` (:class:`Signal` order, units of
+    :data:`GAIN_UNITS`) and the signals they multiply (SI)."""
+    return (k[0] * delta_f_rad + k[1] * yaw_rate_radps + k[2] * roll_rad
+            + k[3] * roll_rate_radps + k[4] * lateral_velocity_mps)
+
+
+def actuator_step(angle_rad: float, command_rad: float, angle_limit_rad: float,
+                  max_step_rad: float) -> float:
+    """The rear actuator's angle after one period: from ``angle_rad`` toward ``command_rad``
+    clipped to ``+-angle_limit_rad``, by at most ``max_step_rad`` (the rate limit times the
+    period). Angles in rad."""
+    target = min(max(command_rad, -angle_limit_rad), angle_limit_rad)
+    step = min(max(target - angle_rad, -max_step_rad), max_step_rad)
+    return angle_rad + step
 
 
 def check_speed(speed_mps: float, field: str = "speed_mps") -> float:
@@ -168,6 +238,12 @@ class Law(ABC):
     def _design_gains(self, speed_mps: float) -> np.ndarray:
         """Gains in :class:`Signal` order at ``speed_mps >= min_speed_mps``."""
 
+    def gain_function(self) -> GainFunction | None:
+        """The law's gain schedule as a plain function (:class:`GainFunction`; its
+        ``evaluate`` is :meth:`_design_gains`), or None for a law that has none (it then only
+        runs interpreted)."""
+        return None
+
     def gains(self, speed_mps: float) -> np.ndarray:
         """Gain vector in :class:`Signal` order at forward speed ``speed_mps`` (m/s).
 
@@ -182,10 +258,10 @@ class Law(ABC):
         u = float(speed_mps)
         if not math.isfinite(u):
             raise NonFiniteError(f"{self.name}: speed_mps must be finite, got {speed_mps!r}")
-        if u >= self.min_speed_mps:
-            k = self._design_gains(u)
-        else:
-            k = self._design_gains(self.min_speed_mps) * (max(u, 0.0) / self.min_speed_mps)
+        design_speed, scale = gain_speed(u, self.min_speed_mps)
+        k = self._design_gains(design_speed)
+        if scale != 1.0:
+            k = k * scale
         if not np.all(np.isfinite(k)):
             raise NonFiniteError(f"{self.name}: non-finite gains {k} at speed {u} m/s")
         return k
@@ -198,9 +274,8 @@ class Law(ABC):
     def rear_angle(self, inp: LawInput) -> float:
         """Rear road-wheel angle command in rad (before actuator limits)."""
         k = self.gains(inp.speed_mps)
-        out = (k[0] * inp.delta_f_rad + k[1] * inp.yaw_rate_radps + k[2] * inp.roll_rad
-               + k[3] * inp.roll_rate_radps + k[4] * inp.lateral_velocity_mps)
-        out = float(out)
+        out = float(rear_angle_of(k, inp.delta_f_rad, inp.yaw_rate_radps, inp.roll_rad,
+                                  inp.roll_rate_radps, inp.lateral_velocity_mps))
         if not math.isfinite(out):
             raise NonFiniteError(f"{self.name}: non-finite rear angle for input {inp}")
         return out
@@ -306,8 +381,6 @@ class RearSteerActuator:
         if not math.isfinite(cmd):
             raise NonFiniteError(f"rear actuator: command must be finite, got {command_rad!r}")
         dt = check_option("dt_s", dt_s)
-        target = min(max(cmd, -self.angle_limit_rad), self.angle_limit_rad)
-        max_step = self.rate_limit_rad_per_s * dt
-        step = min(max(target - self.angle_rad, -max_step), max_step)
-        self.angle_rad += step
+        self.angle_rad = actuator_step(self.angle_rad, cmd, self.angle_limit_rad,
+                                       self.rate_limit_rad_per_s * dt)
         return self.angle_rad
