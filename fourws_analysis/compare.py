@@ -11,6 +11,7 @@ maneuver                                    metrics
 ``random_steer``                            frequency response (Welch H1)
 ``step_steer``, ``ramp_steer``              ISO 7401 step metrics, identified eigenvalues
 ``slow_ramp_steer``, ``constant_radius``    ISO 4138 gradients, understeer, char. speed
+``double_lane_change``                      ISO 3888-2 clearance to the cones, pass/fail
 every run with a vehicle                    eigenvalues of the linearized 8-DOF vs speed
 ==========================================  =============================================
 
@@ -33,7 +34,7 @@ import control
 import numpy as np
 
 from fourws_analysis import frequency as fq
-from fourws_analysis import identify, iso4138, iso7401, linear, linearize, units
+from fourws_analysis import identify, iso4138, iso7401, lane_change, linear, linearize, units
 from fourws_analysis.bag import MetricUnavailableError, UniformRun
 from fourws_control import Law, LinearGains, make_law
 from fourws_sim.errors import FourwsError
@@ -58,6 +59,10 @@ STEER_REFERENCES = {
 Progress = Callable[[str], None]
 #: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options.
 _SWEEP_CACHE: dict[str, Any] = {}
+#: Open-loop 8-DOF Jacobians at straight running already computed in this process, by vehicle
+#: and speed (a run's overlays, its sampled loop and the points of a study share them).
+_JACOBIAN_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+_JACOBIAN_CACHE_SIZE = 256
 
 
 @dataclass
@@ -104,6 +109,7 @@ class RunAnalysis:
     models: dict[str, control.StateSpace] = field(default_factory=dict)
     step: iso7401.StepResult | None = None
     steady: iso4138.SteadyStateHandling | None = None
+    lane_change: lane_change.LaneChangeResult | None = None
     modes: identify.IdentifiedModes | None = None
     sampled: dict[str, linear.SampledLoop] = field(default_factory=dict)
     eig_sweep: linearize.EigenSweep | None = None
@@ -171,6 +177,8 @@ class RunAnalysis:
             out["iso7401_step"] = self.step.to_dict()
         if self.steady is not None:
             out["iso4138_steady_state"] = self.steady.to_dict()
+        if self.lane_change is not None:
+            out["iso3888_lane_change"] = self.lane_change.to_dict()
         if self.modes is not None:
             out["identified_modes"] = self.modes.to_dict()
         if self.models:
@@ -254,10 +262,15 @@ def _eightdof_loop(vehicle: Any, speed_mps: float, law: Any, belief_vehicle: Any
     ``(a, b, gains, model module)``, ``delta_r = K_x x + K_u u``. ``law`` is a name (built on
     the belief vehicle with ``law_options``) or a built law."""
     mod = get_model("8dof")
-    p = mod.params_for(vehicle)
-    x0 = mod.initial_state(p, speed_mps)
-    u0 = np.zeros(len(mod.INPUT))
-    a, b = linearize.jacobians(mod.derivatives, x0, u0, p)
+    key = json.dumps([vehicle.to_dict(), float(speed_mps)], sort_keys=True, default=str)
+    if key not in _JACOBIAN_CACHE:
+        p = mod.params_for(vehicle)
+        x0 = mod.initial_state(p, speed_mps)
+        u0 = np.zeros(len(mod.INPUT))
+        if len(_JACOBIAN_CACHE) >= _JACOBIAN_CACHE_SIZE:
+            _JACOBIAN_CACHE.pop(next(iter(_JACOBIAN_CACHE)))
+        _JACOBIAN_CACHE[key] = linearize.jacobians(mod.derivatives, x0, u0, p)
+    a, b = (m.copy() for m in _JACOBIAN_CACHE[key])
     law_obj = law if isinstance(law, Law) else make_law(
         law, belief_vehicle if belief_vehicle is not None else vehicle,
         **dict(law_options or {}))
@@ -362,7 +375,7 @@ def _try(result: RunAnalysis, metric: str, fn: Callable[[], Any]) -> Any:
     return None
 
 
-def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
+def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
                 progress: Progress | None = None) -> RunAnalysis:
     """Compute every metric ``run`` can give (see the module docstring).
 
@@ -371,6 +384,9 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
     run : UniformRun
     eig_sweep : bool
         Also compute the eigenvalues of the linearized 8-DOF vs speed.
+    models : bool
+        Also build the linear model overlays (2-DOF, 3-DOF, 8-DOF linearized, each also
+        sampled); False gives the metrics of the record alone.
     progress : callable, optional
         Called with a short description before each step.
     """
@@ -407,7 +423,7 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
     period = _law_period(run)
     if period is not None:
         options = {**options, "control_period_s": period}
-    if vehicle is not None and math.isfinite(speed):
+    if models and vehicle is not None and math.isfinite(speed):
         for model in ("2dof", "3dof"):
             if model == "3dof" and vehicle.roll is None:
                 continue
@@ -424,6 +440,8 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
                 res.models["8dof-lin"] = sys8
         if period is not None:
             _sampled_models(res, vehicle, speed, period, belief, options)
+    elif not models:
+        res.notes.append("linear model overlays not asked for")
 
     # frequency response
     if man in fq.FREQUENCY_MANEUVERS:
@@ -497,6 +515,16 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
         res.unavailable["iso4138_steady_state"] = (
             f"needs a slow_ramp_steer or constant_radius run; this run is "
             f"{man or 'unrecognized'}")
+
+    # ISO 3888-2
+    if man == "double_lane_change":
+        tick(f"{run.name}: lane change")
+        res.lane_change = _try(res, "iso3888_lane_change",
+                               lambda: lane_change.lane_change_of_run(
+                                   ch["x_m"], ch["y_m"], run.config["maneuver"]))
+    else:
+        res.unavailable["iso3888_lane_change"] = (f"needs a double_lane_change run; this run "
+                                                  f"is {man or 'unrecognized'}")
 
     if eig_sweep and vehicle is not None and vehicle.body is not None:
         tick(f"{run.name}: 8-DOF eigenvalues vs speed")

@@ -25,7 +25,6 @@ The compiled path is tested to give the twin's arrays bit for bit (``test/test_s
 
 from __future__ import annotations
 
-import dataclasses
 import importlib.util
 import math
 import sys
