@@ -193,6 +193,8 @@ td:nth-child(2),th:nth-child(2){text-align:left;color:#555}
 tr:nth-child(even){background:#f7f7f7}
 .reading{background:#f3f6fb;border-left:4px solid #4a72b0;padding:.4em 1em;margin:1em 0}
 img{max-width:100%;border:1px solid #eee;margin:.5em 0}.note{color:#775;font-size:.85em}"""
+#: The reports' style sheet (the study report shares it).
+REPORT_CSS = _CSS
 
 
 def _list_html(items: Sequence[str], cls: str = "") -> str:

@@ -26,6 +26,7 @@ The compiled path is tested to give the twin's arrays bit for bit (``test/test_s
 from __future__ import annotations
 
 import importlib.util
+import json
 import math
 import sys
 from dataclasses import dataclass, field
@@ -38,7 +39,7 @@ from fourws_control import Law, RearSteerActuator, make_loop_law
 from fourws_run.closed_loop import ClosedLoopResult, run_closed_loop
 from fourws_run.config import RunConfig
 from fourws_run.ticks import InputLimits, whole_multiple
-from fourws_sim.maneuvers import make_maneuver
+from fourws_sim.maneuvers import Maneuver, make_maneuver
 
 #: Maneuver types whose steering depends on time only and whose driver holds the initial speed
 #: throughout (the compiled path takes them; the others need the interpreted twin).
@@ -52,6 +53,9 @@ DURATION = "duration"
 
 _LOADED: dict[str, ModuleType] = {}
 _REGISTERED = False
+#: Steering of each tick by maneuver definition (:func:`_steering`).
+_STEERING: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+_STEERING_CACHE_SIZE = 64
 
 
 def _register_plain_functions() -> None:
@@ -193,6 +197,46 @@ def run_twin(config: RunConfig, fallback: str = "") -> LoopRecord:
     return twin_record(result, fallback)
 
 
+def _steering(man: Maneuver, speed: float, dt: float,
+              n_step: int) -> tuple[np.ndarray, np.ndarray] | str:
+    """The steering-wheel and front road-wheel angle the maneuver commands at each tick the
+    twin runs (ticks ``t_k = k n dt`` until the maneuver is done), or why there are none.
+
+    Computed by the maneuver itself (``command`` at each tick; for the
+    :data:`TIME_STEERED` types the steering depends on the time only) and kept per maneuver
+    definition without its speed and speed hold, which the steering does not read.
+    """
+    spec = man.spec.to_dict()
+    for key in ("initial_speed_mps", "speed_hold", "name", "description"):
+        spec.pop(key, None)
+    ratio = man.vehicle.steering.ratio if man.vehicle.steering is not None else None
+    key = json.dumps([spec, ratio, dt, n_step], sort_keys=True, default=str)
+    if key in _STEERING:
+        return _STEERING[key]
+    period = n_step * dt
+    limit = int(math.ceil(man.duration_s / period)) + 1
+    hand, front = [], []
+    probe = {"speed_mps": speed}
+    for k in range(limit):
+        t = (k * n_step) * dt
+        if man.done(t, None):
+            break
+        cmd = man.command(t, probe)
+        hand.append(cmd.steering_wheel_angle_rad)
+        front.append(cmd.front_wheel_angle_rad)
+    else:
+        return "the maneuver does not end within its duration"
+    if not front:
+        return "the maneuver ends before its first tick"
+    result = (np.array(hand, dtype=np.float64), np.array(front, dtype=np.float64))
+    for arr in result:
+        arr.flags.writeable = False
+    if len(_STEERING) >= _STEERING_CACHE_SIZE:
+        _STEERING.pop(next(iter(_STEERING)))
+    _STEERING[key] = result
+    return result
+
+
 def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     """Run ``config`` in one compiled call; the :class:`LoopRecord`, or why the twin must run
     it (a string).
@@ -218,25 +262,11 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     eightdof.check_step(p, dt, config.integrator, vehicle.source or vehicle.name)
     speed = config.maneuver.initial_speed_mps
     x = eightdof.initial_state(p, float(speed))
-    # the ticks the twin runs and the maneuver's steering at each of them
     man = make_maneuver(config.maneuver, vehicle)
-    limit = int(math.ceil(man.duration_s / period)) + 1
-    times = []
-    hand, front = [], []
-    probe = {"speed_mps": float(speed)}
-    for k in range(limit):
-        t = (k * n_step) * dt
-        if man.done(t, None):
-            break
-        cmd = man.command(t, probe)
-        times.append(t)
-        hand.append(cmd.steering_wheel_angle_rad)
-        front.append(cmd.front_wheel_angle_rad)
-    else:
-        return "the maneuver does not end within its duration"
-    if not times:
-        return "the maneuver ends before its first tick"
-    hand_a, front_a = np.array(hand, dtype=np.float64), np.array(front, dtype=np.float64)
+    steering = _steering(man, float(speed), dt, n_step)
+    if isinstance(steering, str):
+        return steering
+    hand_a, front_a = steering
     limits = InputLimits.for_vehicle(vehicle)
     if not (np.all(np.abs(front_a) <= limits.front_angle_limit_rad)
             and np.all(np.abs(hand_a) <= limits.steering_wheel_limit_rad)):
@@ -263,7 +293,7 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     gains = law.gain_function()
     assert gains is not None
     kind = next(i for i, f in enumerate(module.LAW_FUNCTIONS) if gains.function is f)
-    out = np.zeros((len(times), module.N_CHANNELS))
+    out = np.zeros((front_a.size, module.N_CHANNELS))
     code, ticks = module.closed_loop(
         x, p.arr, p.coeffs_front, p.coeffs_rear, float(dt), int(n_step), hand_a, front_a,
         drv, int(kind), np.ascontiguousarray(gains.params), float(law.min_speed_mps),

@@ -40,7 +40,7 @@ from fourws_control import Law, RearSteerActuator
 from fourws_run.config import RunConfig
 from fourws_sim.errors import FourwsError
 from fourws_study.kernel import LoopRecord, build_law, run_loop
-from fourws_study.spec import Study
+from fourws_study.spec import Point, Study
 
 #: Eigenvalues closer to 0 than this (1/s) are the 8-DOF's coasting-speed and wheel-spin
 #: modes at a trim without drag (and position and heading): the steer does not reach them,
@@ -221,6 +221,36 @@ def _json_default(obj: Any) -> Any:
     return str(obj)
 
 
+def point_row(study: Study, point: Point) -> dict[str, Any]:
+    """The identifying columns of a point: number, sample, seed, axis values, law."""
+    row: dict[str, Any] = {"point": point.index, "sample": point.sample, "seed": point.seed}
+    row.update(point.values)
+    row["law"] = study.base.law if "law" not in row else row["law"]
+    row["status_reason"] = ""
+    return row
+
+
+def evaluate(row: dict[str, Any], study: Study, config: RunConfig, law: Law,
+             record: LoopRecord) -> dict[str, Any]:
+    """Fill ``row`` with what a run gives (metrics, extremes, status, linear eigenvalues):
+    the same for the offline run of a point and for its rerun through the node graph."""
+    steps = int(round(config.controller_period_s / config.integration_step_s))
+    row.update(speed_mps=config.speed_mps, engine=record.engine, fallback=record.fallback,
+               end_reason=record.end_reason,
+               duration_s=float(record.time_s[-1] - record.time_s[0]),
+               vehicle_steps=int(record.time_s.size) * steps)
+    extremes = extremes_of(record, config, study.spin_sideslip_rad)
+    row.update(extremes.to_dict())
+    flat, everything = analysis_metrics(uniform_run(record, config))
+    row.update(flat)
+    everything["extremes"] = extremes.to_dict()
+    status, reason, at = status_of(record, extremes, study.spin_sideslip_rad)
+    row.update(status=status, status_reason=reason, status_time_s=at)
+    row.update(linear_stability(config, law))
+    row["metrics_json"] = json.dumps(everything, default=_json_default, sort_keys=True)
+    return row
+
+
 def run_point(study: Study, index: int, compiled: bool = True) -> dict[str, Any]:
     """The result row of point ``index`` of ``study`` (module docstring); never raises for
     what the point does (a failing point is ``status`` ``error``).
@@ -235,29 +265,12 @@ def run_point(study: Study, index: int, compiled: bool = True) -> dict[str, Any]
     """
     t0 = time.perf_counter()
     point = study.point(index)
-    row: dict[str, Any] = {"point": point.index, "sample": point.sample, "seed": point.seed}
-    row.update(point.values)
-    row["law"] = study.base.law if "law" not in row else row["law"]
-    row["status_reason"] = ""
+    row = point_row(study, point)
     try:
         config = study.config(point)
         row["speed_mps"] = config.speed_mps
         law = law_for(config)
-        record = run_loop(config, law, compiled=compiled)
-        steps = int(round(config.controller_period_s / config.integration_step_s))
-        row.update(engine=record.engine, fallback=record.fallback,
-                   end_reason=record.end_reason,
-                   duration_s=float(record.time_s[-1] - record.time_s[0]),
-                   vehicle_steps=int(record.time_s.size) * steps)
-        extremes = extremes_of(record, config, study.spin_sideslip_rad)
-        row.update(extremes.to_dict())
-        flat, everything = analysis_metrics(uniform_run(record, config))
-        row.update(flat)
-        everything["extremes"] = extremes.to_dict()
-        status, reason, at = status_of(record, extremes, study.spin_sideslip_rad)
-        row.update(status=status, status_reason=reason, status_time_s=at)
-        row.update(linear_stability(config, law))
-        row["metrics_json"] = json.dumps(everything, default=_json_default, sort_keys=True)
+        evaluate(row, study, config, law, run_loop(config, law, compiled=compiled))
     except FourwsError as exc:
         row.update(status="error", status_reason=str(exc))
     except np.linalg.LinAlgError as exc:
@@ -266,6 +279,6 @@ def run_point(study: Study, index: int, compiled: bool = True) -> dict[str, Any]
     return row
 
 
-__all__ = ["STATUSES", "ZERO_MODE_PER_S", "analysis_metrics", "columns", "extremes_of",
-           "law_for", "linear_model_of", "linear_stability", "run_point", "status_of",
-           "uniform_run"]
+__all__ = ["STATUSES", "ZERO_MODE_PER_S", "analysis_metrics", "columns", "evaluate",
+           "extremes_of", "law_for", "linear_model_of", "linear_stability", "point_row",
+           "run_point", "status_of", "uniform_run"]
