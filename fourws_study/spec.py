@@ -849,8 +849,8 @@ def _report(data: Any, grid: tuple[Axis, ...], source: str) -> ReportSpec:
         raise ParameterError(f"report.{extra[0]}", "unknown field (valid: map_axes, metrics, "
                              "worst)", source)
     axes = data.get("map_axes", numeric[:2])
-    if not isinstance(axes, (list, tuple)) or not 1 <= len(axes) <= 2:
-        raise ParameterError("report.map_axes", f"must list one or two grid axes, got "
+    if not isinstance(axes, (list, tuple)) or len(axes) > 2:
+        raise ParameterError("report.map_axes", f"must list up to two grid axes, got "
                              f"{axes!r}", source)
     for a in axes:
         if a not in numeric:
