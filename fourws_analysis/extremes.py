@@ -67,11 +67,12 @@ def run_extremes(time_s: np.ndarray, sideslip_rad: np.ndarray, yaw_rate_radps: n
     Parameters
     ----------
     time_s : ndarray
-        Tick times, s.
+        Times of the states, s.
     sideslip_rad, yaw_rate_radps, lateral_accel_mps2, roll_rad : ndarray
-        The state at each tick.
+        The state at those times.
     rear_angle_rad : ndarray
-        The rear actuator's angle commanded at each tick (held over the next period), rad.
+        The rear actuator's angle commanded at each tick (held over the next period), rad
+        (one per answered state: the final state of a run has none).
     period_s : float
         Control period, s: each tick holds its angle this long.
     angle_limit_rad, rate_limit_radps : float

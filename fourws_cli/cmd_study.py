@@ -72,11 +72,12 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _study(args: argparse.Namespace, target: str) -> int:
-    from fourws_study.execute import run_study
+    from fourws_study.execute import check_size, run_study
     from fourws_study.report import write_study_report
     from fourws_study.spec import load_study
 
     study = load_study(target)
+    check_size(study, args.force)
     out = args.out if args.out is not None else Path("studies") / study.name
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     print(f"fourws study {study.name}: {study.n_points} points in blocks of "
@@ -147,11 +148,14 @@ def _rerun(args: argparse.Namespace, root: Path) -> int:
         shown = [d for d in diffs if d[0] in ("status", "max_abs_sideslip_rad",
                                               "max_abs_yaw_rate_radps")
                  or d[0].startswith(("iso7401.yaw_rate", "iso3888.", "iso4138.under"))]
-        print(f"{'metric':<64} {'study':>14} {'graph':>14}")
+        width = max((len(d[0]) for d in shown), default=6)
+        print(f"{'metric':<{width}} {'study':>14} {'graph':>14}")
         for col, a, b, _ in shown:
-            print(f"{col:<64} {_short(a):>14} {_short(b):>14}")
-        if worst is not None:
+            print(f"{col:<{width}} {_short(a):>14} {_short(b):>14}")
+        if worst is not None and worst[3] > 0.0:
             print(f"largest relative difference: {worst[3]:.3g} ({worst[0]})")
+        elif worst is not None:
+            print(f"every one of the {len(diffs)} compared columns is identical")
     (record.run_dir / "rerun.json").write_text(json.dumps(result, indent=2, default=str))
     print(f"bag: {record.bag_path}  (fourws analyze {record.bag_path})")
     return record.exit_code

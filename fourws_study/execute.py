@@ -202,6 +202,20 @@ def _dask_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
             cluster.close()
 
 
+def check_size(study: Study, force: bool) -> None:
+    """Refuse a study of more than :data:`fourws_study.spec.MAX_POINTS` points unless
+    ``force``.
+
+    Raises
+    ------
+    ParameterError
+        Too many points.
+    """
+    if study.n_points > MAX_POINTS and not force:
+        raise ParameterError("points", f"the study has {study.n_points} points (more than "
+                             f"{MAX_POINTS}); give --force to run it", study.source)
+
+
 def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str = "local",
               scheduler: str | None = None, resume: bool = False, force: bool = False,
               compiled: bool = True, progress_stream: TextIO | None = None,
@@ -248,9 +262,7 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
         raise ParameterError("--workers", f"must be an integer >= 1, got {workers!r}")
     if scheduler and backend != "dask":
         raise ParameterError("--scheduler", "only with --backend dask")
-    if study.n_points > MAX_POINTS and not force:
-        raise ParameterError("points", f"the study has {study.n_points} points (more than "
-                             f"{MAX_POINTS}); give --force to run it", study.source)
+    check_size(study, force)
     store = StudyStore(Path(out), study, study.block_size)
     store.open(resume)
     missing = store.missing_blocks()
@@ -283,4 +295,5 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
     return run
 
 
-__all__ = ["BACKENDS", "Progress", "RESULTS", "StudyRun", "run_block", "run_study"]
+__all__ = ["BACKENDS", "Progress", "RESULTS", "StudyRun", "check_size", "run_block",
+           "run_study"]

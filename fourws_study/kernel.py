@@ -29,9 +29,8 @@ import importlib.util
 import json
 import math
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import ModuleType
-from typing import Any
 
 import numpy as np
 
@@ -124,9 +123,12 @@ class LoopRecord:
         ``duration``, the maneuver's end or abort reason, or the divergence (the twin's
         ``end_reason``).
     engine : str
-        ``compiled`` or ``twin``: which path computed it.
+        ``compiled`` or ``twin`` (``graph`` for a recorded run): which path computed it.
     fallback : str
         Why the twin ran ('' when the compiled path did).
+    final : dict of str to float or None
+        The state channels after the last tick (the state the simulator publishes last and
+        the maneuver answers as done; a bag holds it); None when the run diverged.
     """
 
     time_s: np.ndarray
@@ -134,7 +136,7 @@ class LoopRecord:
     end_reason: str
     engine: str
     fallback: str = ""
-    extra: dict[str, Any] = field(default_factory=dict)
+    final: dict[str, float] | None = None
 
     @property
     def diverged(self) -> bool:
@@ -184,7 +186,11 @@ def twin_record(result: ClosedLoopResult, fallback: str = "") -> LoopRecord:
     drive, brake = result.driver["drive_torque_nm"], result.driver["brake_torque_nm"]
     channels["drive_torque_total_nm"] = drive[:, 0] + drive[:, 1] + drive[:, 2] + drive[:, 3]
     channels["brake_torque_total_nm"] = brake[:, 0] + brake[:, 1] + brake[:, 2] + brake[:, 3]
-    return LoopRecord(result.time_s, channels, result.end_reason, "twin", fallback)
+    from fourws_study.loop_kernels import STATE_CHANNELS
+
+    final = None if result.diverged else {
+        name: float(result.final_outputs[name]) for name in STATE_CHANNELS}
+    return LoopRecord(result.time_s, channels, result.end_reason, "twin", fallback, final)
 
 
 def run_twin(config: RunConfig, fallback: str = "") -> LoopRecord:
@@ -293,7 +299,7 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     gains = law.gain_function()
     assert gains is not None
     kind = next(i for i, f in enumerate(module.LAW_FUNCTIONS) if gains.function is f)
-    out = np.zeros((front_a.size, module.N_CHANNELS))
+    out = np.zeros((front_a.size + 1, module.N_CHANNELS))
     code, ticks = module.closed_loop(
         x, p.arr, p.coeffs_front, p.coeffs_rear, float(dt), int(n_step), hand_a, front_a,
         drv, int(kind), np.ascontiguousarray(gains.params), float(law.min_speed_mps),
@@ -304,9 +310,11 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
                 module.DRIVER_REFUSED: "a driver input the simulator refuses",
                 module.LAW_FAILED: "the law failed",
                 module.COMMAND_REFUSED: "a rear command the simulator refuses"}[int(code)]
-    channels = {name: out[:, i].copy() for i, name in enumerate(module.CHANNELS)}
+    channels = {name: out[:-1, i].copy() for i, name in enumerate(module.CHANNELS)}
+    final = {name: float(out[-1, i]) for i, name in enumerate(module.CHANNELS)
+             if name in module.STATE_CHANNELS}
     return LoopRecord(channels["sim_time_s"], channels, man.abort_reason or DURATION,
-                      "compiled")
+                      "compiled", final=final)
 
 
 def run_loop(config: RunConfig, law: Law | None = None, compiled: bool = True) -> LoopRecord:

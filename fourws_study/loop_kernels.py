@@ -62,6 +62,8 @@ CHANNELS = ("sim_time_s", "x_m", "y_m", "heading_rad", "speed_mps", "lateral_vel
 N_CHANNELS = len(CHANNELS)
 (C_T, C_X, C_Y, C_PSI, C_U, C_V, C_R, C_PHI, C_P, C_BETA, C_AX, C_AY, C_DF, C_DR, C_HAND,
  C_FRONT, C_LAW, C_REAR, C_DRIVE, C_BRAKE) = range(N_CHANNELS)
+#: The channels of the vehicle state (the rest are the answers to it).
+STATE_CHANNELS = CHANNELS[:C_HAND]
 
 #: Law kinds: the position of the law's gain function in this tuple.
 LAW_FUNCTIONS = (fws_gains, sol1_gains, sol2_gains, zero_sideslip_gains, fixed_ratio_gains,
@@ -112,6 +114,29 @@ def _gains(kind, speed, params, out):  # type: ignore[no-untyped-def]
         table_gains(speed, params, out)
 
 
+def _outputs(x, u, q, cf, cr, dx, aux, t, row):  # type: ignore[no-untyped-def]
+    """The state channels of ``row`` at time ``t``: ``Simulator.outputs()`` of state ``x``
+    with the held input ``u`` (accelerations and applied road-wheel angles from the
+    right-hand side)."""
+    _rhs(x, u, q, cf, cr, dx, aux)
+    U = x[i_u]
+    V = x[i_v]
+    row[C_T] = t
+    row[C_X] = x[i_x]
+    row[C_Y] = x[i_y]
+    row[C_PSI] = x[i_psi]
+    row[C_U] = U
+    row[C_V] = V
+    row[C_R] = x[i_r]
+    row[C_PHI] = x[i_phi]
+    row[C_P] = x[i_p]
+    row[C_BETA] = math.atan2(V, U) if (U != 0.0 or V != 0.0) else 0.0
+    row[C_AX] = aux[a_ax]
+    row[C_AY] = aux[a_ay]
+    row[C_DF] = aux[a_df]
+    row[C_DR] = aux[a_dr]
+
+
 def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-untyped-def]
                 law_kind, law_params, min_speed, angle_limit, max_step, out):
     """Run ``out.shape[0]`` control ticks from state ``x`` (modified in place).
@@ -137,15 +162,16 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
     min_speed, angle_limit, max_step : float
         The law's fade speed (m/s), the actuator's angle limit (rad) and largest move per
         control period (rad).
-    out : float64 array (n_ticks, N_CHANNELS)
-        Filled tick by tick with :data:`CHANNELS`.
+    out : float64 array (n_ticks + 1, N_CHANNELS)
+        Filled tick by tick with :data:`CHANNELS`; the last row holds the state after the
+        last tick (its command columns NaN).
 
     Returns
     -------
     (int, int)
         Exit code (``DONE`` or why the twin must take over) and the ticks recorded.
     """
-    n_ticks = out.shape[0]
+    n_ticks = out.shape[0] - 1
     u = np.zeros(N_INPUT)
     dx = np.zeros(N_STATE)
     aux = np.zeros(N_AUX)
@@ -160,27 +186,13 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
     for k in range(n_ticks):
         # the tick's outputs: Simulator.outputs() with the input held since the last step
         t = (k * n_step) * dt
-        _rhs(x, u, q, cf, cr, dx, aux)
+        row = out[k]
+        _outputs(x, u, q, cf, cr, dx, aux, t, row)
         U = x[i_u]
         V = x[i_v]
         r = x[i_r]
         phi = x[i_phi]
         p = x[i_p]
-        row = out[k]
-        row[C_T] = t
-        row[C_X] = x[i_x]
-        row[C_Y] = x[i_y]
-        row[C_PSI] = x[i_psi]
-        row[C_U] = U
-        row[C_V] = V
-        row[C_R] = r
-        row[C_PHI] = phi
-        row[C_P] = p
-        row[C_BETA] = math.atan2(V, U) if (U != 0.0 or V != 0.0) else 0.0
-        row[C_AX] = aux[a_ax]
-        row[C_AY] = aux[a_ay]
-        row[C_DF] = aux[a_df]
-        row[C_DR] = aux[a_dr]
         # the maneuver node's answer: its steering, and the speed-hold driver
         d_f = front[k]
         for i in range(4):
@@ -237,6 +249,11 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
             u[j_b0 + i] = brake[i]
         if _rk4(x, u, q, cf, cr, dt, n_step) < n_step:
             return DIVERGED, k + 1
+    # the final state, which the simulator publishes and the maneuver answers as done
+    final = out[n_ticks]
+    _outputs(x, u, q, cf, cr, dx, aux, (n_ticks * n_step) * dt, final)
+    for c in range(C_HAND, N_CHANNELS):
+        final[c] = math.nan
     return DONE, n_ticks
 
 
@@ -286,4 +303,5 @@ def _jit(func: Any) -> Any:
 
 
 _gains = numba.njit(inline="always", **JIT_OPTIONS)(_gains)
+_outputs = numba.njit(inline="always", **JIT_OPTIONS)(_outputs)
 closed_loop = _jit(closed_loop)

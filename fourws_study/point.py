@@ -34,9 +34,11 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 
 from fourws_analysis import compare, iso4138, iso7401, lane_change, linear
-from fourws_analysis.bag import STATE_CHANNELS, UniformRun
+from fourws_analysis.bag import (STATE_CHANNELS, RunData, TopicArrays, UniformRun,
+                                 resample, stamp_seconds)
 from fourws_analysis.extremes import RunExtremes, run_extremes
 from fourws_control import Law, RearSteerActuator
+from fourws_run import interface
 from fourws_run.config import RunConfig
 from fourws_sim.errors import FourwsError
 from fourws_study.kernel import LoopRecord, build_law, run_loop
@@ -124,14 +126,32 @@ def law_for(config: RunConfig) -> Law:
     return law
 
 
+def _with_final(record: LoopRecord) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Tick times and state channels with the final state appended (what a bag records)."""
+    if record.final is None:
+        return record.time_s, record.channels
+    ch = dict(record.channels)
+    for name, value in record.final.items():
+        ch[name] = np.append(ch[name], value)
+    return ch["sim_time_s"], ch
+
+
 def uniform_run(record: LoopRecord, config: RunConfig, name: str = "point") -> UniformRun:
-    """The run's tick arrays as the analysis reads a bag (:class:`UniformRun`: the state
-    channels, the driver's steering-wheel angle and front road-wheel command)."""
-    ch = {k: v for k, v in record.channels.items()
-          if k in STATE_CHANNELS or k in ("steering_wheel_angle_rad",
-                                           "front_wheel_angle_cmd_rad")}
-    return UniformRun(name, np.asarray(record.time_s, dtype=float),
-                      float(config.controller_period_s), ch, config.to_dict())
+    """The run as ``fourws analyze`` reads its bag: the states the simulator publishes (the
+    ticks and the final state) and the driver inputs answering them, stamped to the ns as the
+    bag stamps them, put on the analysis grid by :func:`fourws_analysis.bag.resample`."""
+    t, full = _with_final(record)
+    ns = np.array([interface.time_to_ns(v) for v in t], dtype=np.int64)
+    stamps = stamp_seconds(ns // interface.NS_PER_S, ns % interface.NS_PER_S)
+    n = record.time_s.size
+    state = TopicArrays(stamps, {k: np.asarray(v, dtype=np.float64) for k, v in full.items()
+                                 if k in STATE_CHANNELS})
+    driver = TopicArrays(stamps[:n], {
+        "steering_wheel_angle_rad": record.channels["steering_wheel_angle_rad"],
+        "front_wheel_angle_rad": record.channels["front_wheel_angle_cmd_rad"]})
+    run = RunData(path=name, config=config.to_dict(),
+                  topics={interface.STATE: state, interface.DRIVER_INPUT: driver})
+    return resample(run)
 
 
 def analysis_metrics(run: UniformRun) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -162,10 +182,11 @@ def status_of(record: LoopRecord, extremes: RunExtremes,
 def extremes_of(record: LoopRecord, config: RunConfig, spin_sideslip_rad: float) -> RunExtremes:
     """:func:`fourws_analysis.extremes.run_extremes` of a run, with its actuator's limits
     (the controller's, from the belief vehicle)."""
-    ch = record.channels
+    t, ch = _with_final(record)
     act = RearSteerActuator(config.belief)
-    return run_extremes(record.time_s, ch["sideslip_rad"], ch["yaw_rate_radps"],
-                        ch["lateral_accel_mps2"], ch["roll_rad"], ch["rear_command_rad"],
+    return run_extremes(t, ch["sideslip_rad"], ch["yaw_rate_radps"],
+                        ch["lateral_accel_mps2"], ch["roll_rad"],
+                        record.channels["rear_command_rad"],
                         float(config.controller_period_s), act.angle_limit_rad,
                         act.rate_limit_rad_per_s, spin_sideslip_rad)
 

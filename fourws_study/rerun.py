@@ -84,7 +84,7 @@ def record_from_bag(path: str | Path, end_reason: str = DURATION) -> LoopRecord:
     BagError
         The bag cannot be read or lacks the state, driver or command stream.
     """
-    from fourws_study.loop_kernels import CHANNELS
+    from fourws_study.loop_kernels import CHANNELS, STATE_CHANNELS
 
     run = load_bag(path)
     state = run.require(interface.STATE, "sim_time_s")
@@ -110,7 +110,12 @@ def record_from_bag(path: str | Path, end_reason: str = DURATION) -> LoopRecord:
     channels["rear_law_rad"] = np.full(sel.size, math.nan)  # the law's own output is not sent
     channels["drive_torque_total_nm"] = driver.fields["drive_torque_nm"][d_sel].sum(axis=1)
     channels["brake_torque_total_nm"] = driver.fields["brake_torque_nm"][d_sel].sum(axis=1)
-    return LoopRecord(channels["sim_time_s"], channels, end_reason, "graph")
+    final = None
+    if ticks and ticks[-1] + 1 < order.size and not end_reason.startswith(
+            "the simulation diverged"):
+        last = order[ticks[-1] + 1]  # the state after the last answered tick
+        final = {name: float(state.fields[name][last]) for name in STATE_CHANNELS}
+    return LoopRecord(channels["sim_time_s"], channels, end_reason, "graph", final=final)
 
 
 def bag_row(study: Study, index: int, config: RunConfig, bag: str | Path,

@@ -814,10 +814,12 @@ def _monte_carlo(data: Any, base: BaseRun, source: str) -> MonteCarlo | None:
             if check not in _CHECKS:
                 continue
             base_value = _base_value(base, t)
-            ends = [_combine(base_value, t, op, v) for v in (lo, hi)]
+            # the log-normal's 0 is an open bound: it draws values > 0 only
+            ends = [_combine(base_value, t, op, v) for v in (lo, hi)
+                    if not (dist.kind == "lognormal" and v == 0.0)]
             ok, rel = _CHECKS[check]
             for e in ends:
-                if math.isinf(e) or not ok(e):
+                if not ok(e):
                     raise ParameterError(where, f"can draw {t.name} = {e:g}, which must be "
                                          f"{rel}; give truncate: [low, high]", source)
         axes.append(Axis(str(key), targets, op, (), dist))
@@ -901,8 +903,13 @@ def _validate_points(study: Study) -> None:
             raise ParameterError("law", f"{law}: {_problem(exc)}", study.source) from None
     check(base_config)
     if study.n_points <= VALIDATE_ALL_MAX:
+        # the law changes no vehicle, belief scale or maneuver: one point per other values
+        seen = set()
         for point in study.points():
-            check(study.config(point))
+            key = tuple(v for k, v in point.values if k != "law")
+            if key not in seen:
+                seen.add(key)
+                check(study.config(point))
         return
     # too many to build each: every grid value on its own, and the ends of each draw
     for axis in study.grid:
