@@ -29,6 +29,7 @@ import importlib.util
 import json
 import math
 import sys
+import time
 from dataclasses import dataclass
 from types import ModuleType
 
@@ -129,6 +130,8 @@ class LoopRecord:
     final : dict of str to float or None
         The state channels after the last tick (the state the simulator publishes last and
         the maneuver answers as done; a bag holds it); None when the run diverged.
+    loop_seconds : float
+        Wall time of the compiled call alone, s (0 for the twin; ``fourws bench --study``).
     """
 
     time_s: np.ndarray
@@ -137,6 +140,7 @@ class LoopRecord:
     engine: str
     fallback: str = ""
     final: dict[str, float] | None = None
+    loop_seconds: float = 0.0
 
     @property
     def diverged(self) -> bool:
@@ -300,11 +304,13 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     assert gains is not None
     kind = next(i for i, f in enumerate(module.LAW_FUNCTIONS) if gains.function is f)
     out = np.zeros((front_a.size + 1, module.N_CHANNELS))
+    t0 = time.perf_counter()
     code, ticks = module.closed_loop(
         x, p.arr, p.coeffs_front, p.coeffs_rear, float(dt), int(n_step), hand_a, front_a,
         drv, int(kind), np.ascontiguousarray(gains.params), float(law.min_speed_mps),
         float(actuator.angle_limit_rad), float(actuator.rate_limit_rad_per_s * float(period)),
         out)
+    loop_seconds = time.perf_counter() - t0
     if code != module.DONE:
         return {module.DIVERGED: "the simulation diverged",
                 module.DRIVER_REFUSED: "a driver input the simulator refuses",
@@ -314,7 +320,7 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     final = {name: float(out[-1, i]) for i, name in enumerate(module.CHANNELS)
              if name in module.STATE_CHANNELS}
     return LoopRecord(channels["sim_time_s"], channels, man.abort_reason or DURATION,
-                      "compiled", final=final)
+                      "compiled", final=final, loop_seconds=loop_seconds)
 
 
 def run_loop(config: RunConfig, law: Law | None = None, compiled: bool = True) -> LoopRecord:

@@ -113,10 +113,12 @@ def columns(study: Study) -> list[tuple[str, str]]:
     return cols
 
 
-def law_for(config: RunConfig) -> Law:
+def law_for(config: RunConfig, belief_dict: dict[str, Any] | None = None) -> Law:
     """The run's law (:func:`fourws_study.kernel.build_law`), shared by the points of this
-    process with the same law, belief, period and options."""
-    key = json.dumps([config.law, config.belief.to_dict(), config.controller_period_s,
+    process with the same law, belief, period and options (``belief_dict``:
+    ``config.belief.to_dict()`` when the caller has it)."""
+    belief = config.belief.to_dict() if belief_dict is None else belief_dict
+    key = json.dumps([config.law, belief, config.controller_period_s,
                       dict(config.law_options)], sort_keys=True, default=str)
     law = _LAWS.get(key)
     if law is None:
@@ -136,10 +138,12 @@ def _with_final(record: LoopRecord) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     return ch["sim_time_s"], ch
 
 
-def uniform_run(record: LoopRecord, config: RunConfig, name: str = "point") -> UniformRun:
+def uniform_run(record: LoopRecord, config: RunConfig, name: str = "point",
+                config_dict: dict[str, Any] | None = None) -> UniformRun:
     """The run as ``fourws analyze`` reads its bag: the states the simulator publishes (the
     ticks and the final state) and the driver inputs answering them, stamped to the ns as the
-    bag stamps them, put on the analysis grid by :func:`fourws_analysis.bag.resample`."""
+    bag stamps them, put on the analysis grid by :func:`fourws_analysis.bag.resample`
+    (``config_dict``: ``config.to_dict()`` when the caller has it)."""
     t, full = _with_final(record)
     ns = np.array([interface.time_to_ns(v) for v in t], dtype=np.int64)
     stamps = stamp_seconds(ns // interface.NS_PER_S, ns % interface.NS_PER_S)
@@ -149,7 +153,8 @@ def uniform_run(record: LoopRecord, config: RunConfig, name: str = "point") -> U
     driver = TopicArrays(stamps[:n], {
         "steering_wheel_angle_rad": record.channels["steering_wheel_angle_rad"],
         "front_wheel_angle_rad": record.channels["front_wheel_angle_cmd_rad"]})
-    run = RunData(path=name, config=config.to_dict(),
+    run = RunData(path=name,
+                  config=config.to_dict() if config_dict is None else config_dict,
                   topics={interface.STATE: state, interface.DRIVER_INPUT: driver})
     return resample(run)
 
@@ -252,9 +257,10 @@ def point_row(study: Study, point: Point) -> dict[str, Any]:
 
 
 def evaluate(row: dict[str, Any], study: Study, config: RunConfig, law: Law,
-             record: LoopRecord) -> dict[str, Any]:
+             record: LoopRecord, config_dict: dict[str, Any] | None = None) -> dict[str, Any]:
     """Fill ``row`` with what a run gives (metrics, extremes, status, linear eigenvalues):
-    the same for the offline run of a point and for its rerun through the node graph."""
+    the same for the offline run of a point and for its rerun through the node graph
+    (``config_dict``: ``config.to_dict()`` when the caller has it)."""
     steps = int(round(config.controller_period_s / config.integration_step_s))
     row.update(speed_mps=config.speed_mps, engine=record.engine, fallback=record.fallback,
                end_reason=record.end_reason,
@@ -262,7 +268,8 @@ def evaluate(row: dict[str, Any], study: Study, config: RunConfig, law: Law,
                vehicle_steps=int(record.time_s.size) * steps)
     extremes = extremes_of(record, config, study.spin_sideslip_rad)
     row.update(extremes.to_dict())
-    flat, everything = analysis_metrics(uniform_run(record, config))
+    flat, everything = analysis_metrics(uniform_run(record, config,
+                                                    config_dict=config_dict))
     row.update(flat)
     everything["extremes"] = extremes.to_dict()
     status, reason, at = status_of(record, extremes, study.spin_sideslip_rad)
@@ -290,8 +297,10 @@ def run_point(study: Study, index: int, compiled: bool = True) -> dict[str, Any]
     try:
         config = study.config(point)
         row["speed_mps"] = config.speed_mps
-        law = law_for(config)
-        evaluate(row, study, config, law, run_loop(config, law, compiled=compiled))
+        config_dict = config.to_dict()
+        law = law_for(config, config_dict["belief_vehicle"])
+        evaluate(row, study, config, law, run_loop(config, law, compiled=compiled),
+                 config_dict)
     except FourwsError as exc:
         row.update(status="error", status_reason=str(exc))
     except np.linalg.LinAlgError as exc:
