@@ -103,11 +103,14 @@ def _panels(study: Study, table: pa.Table, law_rows: np.ndarray) -> list[Panel]:
 
 
 def critical_speed_8dof_lin(vehicle: Any, law: Any, belief: Any, options: Any,
-                            lo_mps: float, hi_mps: float) -> float | None:
+                            lo_mps: float, hi_mps: float, refine: bool = True,
+                            samples: int = _BOUNDARY_SAMPLES) -> float | None:
     """Lowest speed in [lo, hi] (m/s) where the law closed on the 8-DOF linearized at
     straight running loses stability (largest real part of its modes crosses 0; the
-    coasting-speed and wheel-spin modes at 0 left out), refined with brentq; ``lo`` if it
-    is unstable there, None if stable throughout."""
+    coasting-speed and wheel-spin modes at 0 left out): the first sign change over
+    ``samples`` speeds, refined with brentq (to 1e-4 m/s), or with ``refine`` False
+    interpolated linearly between the two samples (for drawing); ``lo`` if it is unstable
+    there, None if stable throughout."""
     from fourws_study.point import ZERO_MODE_PER_S
 
     def margin(u: float) -> float:
@@ -115,14 +118,17 @@ def critical_speed_8dof_lin(vehicle: Any, law: Any, belief: Any, options: Any,
         eig = eig[np.abs(eig) > ZERO_MODE_PER_S]
         return -float(np.max(eig.real))
 
-    speeds = np.linspace(lo_mps, hi_mps, _BOUNDARY_SAMPLES)
+    speeds = np.linspace(lo_mps, hi_mps, samples)
     prev = margin(float(speeds[0]))
     if prev <= 0.0:
         return float(lo_mps)
     for a, b in zip(speeds[:-1], speeds[1:]):
         m = margin(float(b))
         if m <= 0.0:
-            return float(scipy.optimize.brentq(margin, float(a), float(b), xtol=1e-4))
+            if refine:
+                return float(scipy.optimize.brentq(margin, float(a), float(b), xtol=1e-4))
+            return float(a + (b - a) * prev / (prev - m))
+        prev = m
     return None
 
 
@@ -141,7 +147,8 @@ def analytic_boundary(study: Study, law: str, settings: Sequence[tuple[Axis, Any
     try:
         if config.vehicle.body is not None and config.vehicle.roll is not None:
             out["8dof_lin"] = critical_speed_8dof_lin(config.vehicle, law_obj, config.belief,
-                                                      config.law_options, lo_mps, hi_mps)
+                                                      config.law_options, lo_mps, hi_mps,
+                                                      refine=False)
     except (FourwsError, np.linalg.LinAlgError, ValueError):
         out["8dof_lin"] = None
     try:
@@ -179,6 +186,19 @@ def _cells(study: Study, table: pa.Table, rows: np.ndarray) -> tuple[list[Any], 
     return xs, ys, cells
 
 
+def _panel_axes(n: int, height: float) -> tuple[Any, list[Any]]:
+    """A figure with ``n`` panels in rows of at most three (unused axes hidden)."""
+    plt = _plt()
+    cols = min(n, 3)
+    rows = -(-n // cols)
+    fig, axs = plt.subplots(rows, cols, figsize=(4.4 * cols + 1.2, height * rows + 0.6),
+                            squeeze=False, constrained_layout=True)
+    flat = list(axs.ravel())
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    return fig, flat[:n]
+
+
 def figure_stability(study: Study, table: pa.Table, law: str, rows: np.ndarray,
                      boundaries: bool = True) -> Any:
     """The stability map figure of one law (module docstring)."""
@@ -187,14 +207,13 @@ def figure_stability(study: Study, table: pa.Table, law: str, rows: np.ndarray,
 
     cmap = LinearSegmentedColormap.from_list("okbad", ["#4caf50", "#ffc107", "#e53935"])
     panels = _panels(study, table, rows)
-    fig, axs = plt.subplots(1, len(panels), figsize=(4.6 * len(panels) + 1.2, 3.8),
-                            squeeze=False, constrained_layout=True)
+    fig, axs = _panel_axes(len(panels), 3.9)
     status = _column(table, "status")
     stable8 = _column(table, "stable_8dof_lin")
     x_key = study.report.map_axes[0]
     y_key = study.report.map_axes[1] if len(study.report.map_axes) > 1 else None
     image = None
-    for ax, panel in zip(axs[0], panels):
+    for ax, panel in zip(axs, panels):
         xs, ys, cells = _cells(study, table, panel.rows)
         grid = np.full((len(ys), len(xs)), np.nan)
         for (i, j), idx in cells.items():
@@ -215,16 +234,16 @@ def figure_stability(study: Study, table: pa.Table, law: str, rows: np.ndarray,
         ax.set_ylabel(y_key or "")
         ax.set_title(panel.title or law, fontsize=8)
         if boundaries and y_key is not None and (x_key in SPEED_AXES or y_key in SPEED_AXES):
-            _draw_boundaries(ax, study, law, panel, xs, ys, x_key, y_key)
-    fig.colorbar(image, ax=list(axs[0]), label="share of points spun / diverged / failed")
+            _draw_boundaries(ax, study, table, law, panel, xs, ys, x_key, y_key)
+    fig.colorbar(image, ax=axs, label="share of points spun / diverged / failed")
     fig.suptitle(f"law {law}: stability over {x_key}" + (f" x {y_key}" if y_key else "")
-                 + " (S spun, D diverged, E error; /// 8-DOF linearized unstable)",
+                 + "\n(S spun, D diverged, E error; /// 8-DOF linearized unstable)",
                  fontsize=9)
     return fig
 
 
-def _draw_boundaries(ax: Any, study: Study, law: str, panel: Panel, xs: list[Any],
-                     ys: list[Any], x_key: str, y_key: str) -> None:
+def _draw_boundaries(ax: Any, study: Study, table: pa.Table, law: str, panel: Panel,
+                     xs: list[Any], ys: list[Any], x_key: str, y_key: str) -> None:
     """Critical speed at each value of the other map axis, in cell coordinates."""
     speed_on_x = x_key in SPEED_AXES
     speeds, others = (xs, ys) if speed_on_x else (ys, xs)
@@ -232,7 +251,12 @@ def _draw_boundaries(ax: Any, study: Study, law: str, panel: Panel, xs: list[Any
     per_unit = SPEED_AXES[x_key if speed_on_x else y_key]
     lo, hi = min(speeds) / per_unit, max(speeds) / per_unit
     curves: dict[str, list[tuple[float, float]]] = {}
+    other_col = _column(table, other_axis.key)[panel.rows]
+    verdicts = np.concatenate([_column(table, "stable_8dof_lin")[panel.rows, None],
+                               _column(table, "stable_linear")[panel.rows, None]], axis=1)
     for k, value in enumerate(others):
+        if np.all(verdicts[other_col == value] == 1.0):
+            continue  # stable at every speed of the map in both models: no boundary in it
         found = analytic_boundary(study, law, (*panel.fixed, (other_axis, value)), lo, hi)
         for model, vc in found.items():
             if vc is None:
@@ -255,15 +279,13 @@ def _draw_boundaries(ax: Any, study: Study, law: str, panel: Panel, xs: list[Any
 def figure_heat(study: Study, table: pa.Table, law: str, rows: np.ndarray,
                 metric: str) -> Any:
     """Heat map of ``metric`` (cell means) for one law."""
-    plt = _plt()
     panels = _panels(study, table, rows)
     values = _column(table, metric)
-    fig, axs = plt.subplots(1, len(panels), figsize=(4.6 * len(panels) + 1.2, 3.6),
-                            squeeze=False, constrained_layout=True)
+    fig, axs = _panel_axes(len(panels), 3.4)
     finite = values[rows][np.isfinite(values[rows])]
     vmin, vmax = (float(np.min(finite)), float(np.max(finite))) if finite.size else (0, 1)
     image = None
-    for ax, panel in zip(axs[0], panels):
+    for ax, panel in zip(axs, panels):
         xs, ys, cells = _cells(study, table, panel.rows)
         grid = np.full((len(ys), len(xs)), np.nan)
         for (i, j), idx in cells.items():
@@ -278,32 +300,36 @@ def figure_heat(study: Study, table: pa.Table, law: str, rows: np.ndarray,
         ax.set_xlabel(study.report.map_axes[0])
         ax.set_ylabel(study.report.map_axes[1] if len(study.report.map_axes) > 1 else "")
         ax.set_title(panel.title or law, fontsize=8)
-    fig.colorbar(image, ax=list(axs[0]), label=metric)
+    fig.colorbar(image, ax=axs, label=metric)
     fig.suptitle(f"law {law}: {metric} (cell mean; blank: no value)", fontsize=9)
     return fig
 
 
 def figure_distributions(table: pa.Table, laws: Sequence[str], metric: str) -> Any:
-    """Histogram and empirical CDF of ``metric`` per law (Monte Carlo studies)."""
-    plt = _plt()
+    """Histogram of ``metric`` per law (a panel each, its own bins) and the empirical CDFs of
+    all laws in the last panel, over the points whose status is ``ok`` (a spun run's
+    metrics describe the spin, not the car; their count is in each title)."""
     law_col = _column(table, "law")
     values = _column(table, metric)
-    fig, (h, c) = plt.subplots(1, 2, figsize=(10, 3.6), constrained_layout=True)
-    finite_all = values[np.isfinite(values)]
-    bins = np.histogram_bin_edges(finite_all, bins=30) if finite_all.size else 10
-    for k, law in enumerate(laws):
-        v = values[(law_col == law) & np.isfinite(values)]
+    ok = _column(table, "status") == "ok"
+    fig, axs = _panel_axes(len(laws) + 1, 2.6)
+    cdf = axs[-1]
+    for k, (ax, law) in enumerate(zip(axs, laws)):
+        mine = law_col == law
+        v = values[mine & ok & np.isfinite(values)]
+        left_out = int(np.count_nonzero(mine & ~ok))
+        ax.set_title(f"{law}: {v.size} points" + (f", {left_out} not ok left out"
+                                                   if left_out else ""), fontsize=8)
         if not v.size:
             continue
-        h.hist(v, bins=bins, histtype="step", color=f"C{k % 10}", label=law)
+        ax.hist(v, bins=30, color=f"C{k % 10}")
+        ax.set_ylabel("points")
         s = np.sort(v)
-        c.step(s, np.arange(1, s.size + 1) / s.size, where="post", color=f"C{k % 10}",
-               label=law)
-    h.set_xlabel(metric)
-    h.set_ylabel("points")
-    c.set_xlabel(metric)
-    c.set_ylabel("empirical CDF")
-    c.legend(loc="center left", bbox_to_anchor=(1.02, 0.5), frameon=False)
+        cdf.step(s, np.arange(1, s.size + 1) / s.size, where="post", color=f"C{k % 10}",
+                 label=law)
+    cdf.set_title("empirical CDF", fontsize=8)
+    cdf.legend(loc="lower right", fontsize=6, frameon=False)
+    fig.suptitle(metric, fontsize=9)
     return fig
 
 
