@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import multiprocessing
+import signal
 import sys
 import time
 from collections import Counter
@@ -156,6 +157,12 @@ def _dask_client(workers: int, scheduler: str | None) -> Any:
     return Client(cluster)
 
 
+def _worker_init() -> None:
+    """Local workers leave Ctrl-C to the study's process, which stops them (a terminal sends
+    SIGINT to the whole process group)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _block_task(args: tuple[Study, int, list[int], bool]) -> tuple[int, pa.Table]:
     study, block, points, compiled = args
     return block, run_block(study, points, compiled)
@@ -168,7 +175,8 @@ def _local_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
         for b, points in blocks:
             yield b, run_block(study, points, compiled)
         return
-    pool = multiprocessing.get_context().Pool(min(workers, max(len(blocks), 1)))
+    pool = multiprocessing.get_context().Pool(min(workers, max(len(blocks), 1)),
+                                              initializer=_worker_init)
     try:
         yield from pool.imap_unordered(
             _block_task, [(study, b, list(points), compiled) for b, points in blocks])

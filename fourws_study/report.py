@@ -46,7 +46,7 @@ DEFAULT_METRICS = {
                    "iso7401.yaw_rate_radps.response_time_s",
                    "iso7401.yaw_rate_radps.steady_state_gain_radps_per_rad_road_wheel",
                    "iso7401.tb_factor_s_deg", "max_abs_sideslip_rad"),
-    "double_lane_change": ("iso3888.clearance_m", "max_abs_sideslip_rad",
+    "double_lane_change": ("iso3888.passed", "iso3888.clearance_m", "max_abs_sideslip_rad",
                            "max_abs_yaw_rate_radps"),
     "slow_ramp_steer": ("iso4138.understeer_gradient_rad_per_mps2", "max_abs_sideslip_rad"),
 }

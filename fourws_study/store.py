@@ -29,6 +29,7 @@ from typing import Any, Sequence
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+import yaml
 
 from fourws_sim.errors import ParameterError
 from fourws_study.point import columns
@@ -56,12 +57,16 @@ def rows_to_table(rows: Sequence[dict[str, Any]], study_schema: pa.Schema) -> pa
 
 
 def study_hash(study: Study) -> str:
-    """What identifies a study's results: its file text and its resolved base run (a changed
-    vehicle file changes the runs even when the study file did not)."""
+    """What identifies a study's results: its file's content without the parts that do not
+    change a row (``description``, ``report``) and its resolved base run (a changed vehicle
+    file changes the runs even when the study file did not)."""
+    data = yaml.safe_load(study.text)
+    if isinstance(data, dict):
+        data = {k: v for k, v in data.items() if k not in ("description", "report")}
     base = study.base_config().to_dict()
     base.pop("versions", None)
     digest = hashlib.sha256()
-    digest.update(study.text.encode())
+    digest.update(json.dumps(data, sort_keys=True, default=str).encode())
     digest.update(json.dumps(base, sort_keys=True, default=str).encode())
     return digest.hexdigest()
 
