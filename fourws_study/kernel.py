@@ -19,7 +19,7 @@ the kernel performs exactly as :func:`fourws_run.closed_loop.run_closed_loop` do
 Everything else -- the path-following lane change, the ISO 4138 ramp that ends on a
 condition, braking in a turn, the linear models -- and every compiled run that meets what
 only the interpreted twin decides (a refused input, a failing law, a diverging state: the
-kernel stops with a code) runs through :func:`fourws_run.closed_loop.run_closed_loop` itself.
+kernel stops with a code) runs through :func:`fourws_run.closed_loop.run_twin` itself.
 The compiled path is tested to give the twin's arrays bit for bit (``test/test_study.py``).
 """
 
@@ -36,7 +36,7 @@ from types import ModuleType
 import numpy as np
 
 from fourws_control import Law, RearSteerActuator, make_loop_law
-from fourws_run.closed_loop import ClosedLoopResult, run_closed_loop
+from fourws_run.closed_loop import ClosedLoopResult, run_twin
 from fourws_run.config import RunConfig
 from fourws_run.ticks import InputLimits, whole_multiple
 from fourws_sim.maneuvers import Maneuver, make_maneuver
@@ -197,14 +197,9 @@ def twin_record(result: ClosedLoopResult, fallback: str = "") -> LoopRecord:
     return LoopRecord(result.time_s, channels, result.end_reason, "twin", fallback, final)
 
 
-def run_twin(config: RunConfig, fallback: str = "") -> LoopRecord:
-    """Run ``config`` with :func:`fourws_run.closed_loop.run_closed_loop`."""
-    result = run_closed_loop(config.vehicle, config.maneuver, config.law, model=config.model,
-                             dt_s=config.integration_step_s,
-                             control_period_s=config.controller_period_s,
-                             belief_vehicle=config.belief, integrator=config.integrator,
-                             law_options=config.law_options, tire=config.tire)
-    return twin_record(result, fallback)
+def run_interpreted(config: RunConfig, fallback: str = "") -> LoopRecord:
+    """Run ``config`` with the interpreted twin (:func:`fourws_run.closed_loop.run_twin`)."""
+    return twin_record(run_twin(config), fallback)
 
 
 def _steering(man: Maneuver, speed: float, dt: float,
@@ -332,9 +327,9 @@ def run_loop(config: RunConfig, law: Law | None = None, compiled: bool = True) -
         result = run_compiled(config, law)
         if isinstance(result, LoopRecord):
             return result
-        return run_twin(config, fallback=result)
-    return run_twin(config, fallback="compiled path not asked for")
+        return run_interpreted(config, fallback=result)
+    return run_interpreted(config, fallback="compiled path not asked for")
 
 
 __all__ = ["DRIVEN_WHEELS", "LoopRecord", "TIME_STEERED", "build_law", "compiled_plan",
-           "loop_kernel_for", "run_compiled", "run_loop", "run_twin", "twin_record"]
+           "loop_kernel_for", "run_compiled", "run_interpreted", "run_loop", "twin_record"]

@@ -33,7 +33,7 @@ from fourws_cli.main import main as fourws_main
 from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.maneuvers import DoubleLaneChangeParams
 from fourws_study.execute import run_study
-from fourws_study.kernel import build_law, run_compiled, run_twin
+from fourws_study.kernel import build_law, run_compiled, run_interpreted
 from fourws_study.point import law_for, run_point
 from fourws_study.report import critical_speed_8dof_lin, write_study_report
 from fourws_study.spec import load_study
@@ -125,7 +125,7 @@ def test_study_rows_do_not_depend_on_the_path(tmp_path):
     lane = load_study(_write(tmp_path, "lane", {"scenario": "lane_change", "law": "sol1"}))
     config = lane.config(lane.point(0))
     assert isinstance(run_compiled(config, law_for(config)), str)
-    assert run_twin(config).engine == "twin"
+    assert run_interpreted(config).engine == "twin"
 
 
 # ------------------------------------------------------------------ seeds and draws
