@@ -80,13 +80,15 @@ def _study(args: argparse.Namespace, target: str) -> int:
     check_size(study, args.force)
     out = args.out if args.out is not None else Path("studies") / study.name
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    print(f"fourws study {study.name}: {study.n_points} points in blocks of "
-          f"{study.block_size}, {workers} {args.backend} worker(s)"
-          + (f" at {args.scheduler}" if args.scheduler else "") + f", into {out}",
-          file=sys.stderr, flush=True)
+    def announce(missing: int) -> None:
+        print(f"fourws study {study.name}: {missing} of {study.n_points} points to run in "
+              f"blocks of {study.block_size}, {workers} {args.backend} worker(s)"
+              + (f" at {args.scheduler}" if args.scheduler else "") + f", into {out}",
+              file=sys.stderr, flush=True)
+
     result = run_study(study, out, workers=workers, backend=args.backend,
                        scheduler=args.scheduler, resume=args.resume, force=args.force,
-                       compiled=not args.interpreted)
+                       compiled=not args.interpreted, on_start=announce)
     report = None
     if result.done and not args.no_report:
         report = write_study_report(out, study)

@@ -227,6 +227,7 @@ def check_size(study: Study, force: bool) -> None:
 def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str = "local",
               scheduler: str | None = None, resume: bool = False, force: bool = False,
               compiled: bool = True, progress_stream: TextIO | None = None,
+              on_start: Callable[[int], None] | None = None,
               on_block: Callable[[int], None] | None = None) -> StudyRun:
     """Run every missing block of ``study`` into ``out`` (module docstring).
 
@@ -248,6 +249,8 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
         Use the compiled closed loop where it applies (the rows do not change).
     progress_stream : text stream, optional
         Where the progress bar goes (default stderr; drawn only on a terminal).
+    on_start : callable, optional
+        Called with the number of points to run once the folder is ready (before any runs).
     on_block : callable, optional
         Called with the number of each block written (tests interrupt a study here).
 
@@ -276,6 +279,8 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
     missing = store.missing_blocks()
     run = StudyRun(Path(out), study.n_points, workers=workers, backend=backend)
     run.done = study.n_points - sum(len(store.block_points(b)) for b in missing)
+    if on_start is not None:
+        on_start(study.n_points - run.done)
     bar = Progress(study.n_points, run.done, progress_stream)
     blocks = [(b, store.block_points(b)) for b in missing]
     t0 = time.perf_counter()
