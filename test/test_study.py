@@ -132,10 +132,10 @@ def test_study_rows_do_not_depend_on_the_path(tmp_path):
 
 def test_seeds_reproduce_and_draws_follow_their_distributions(tmp_path):
     """A point's draws come from its seed alone (the same on a fresh load), the points of
-    one sample share them, and 4000 draws have the analytic means of their distributions
+    one sample share them, and 2000 draws have the analytic means of their distributions
     (truncated normal, uniform, log-normal median) within 4 standard errors."""
     data = {"scenario": _scenario(), "grid": {"law": ["fws", "sol1"]},
-            "monte_carlo": {"samples": 4000, "seed": 7, "fields": {
+            "monte_carlo": {"samples": 2000, "seed": 7, "fields": {
                 "vehicle.chassis.mass_kg, vehicle.roll.sprung_mass_kg": {
                     "apply": "scale", "distribution": "normal", "mean": 1.0, "std": 0.05,
                     "truncate": [0.95, 1.2]},
@@ -145,7 +145,9 @@ def test_seeds_reproduce_and_draws_follow_their_distributions(tmp_path):
                     "apply": "scale", "distribution": "lognormal", "median": 1.1,
                     "sigma": 0.05}}}}
     study = load_study(_write(tmp_path, "mc", data))
-    again = load_study(_write(tmp_path, "mc", data))
+    # a fresh load (of fewer samples: a sample's seed depends on the study seed and its number)
+    again = load_study(_write(tmp_path, "mc", {
+        **data, "monte_carlo": {**data["monte_carlo"], "samples": 1235}}))
     p, q = study.point(2 * 1234 + 1), again.point(2 * 1234 + 1)
     assert p == q and p.sample == 1234 and p.value("law") == "sol1"
     assert study.point(2 * 1234).values[1:] == p.values[1:]  # one sample, both laws
