@@ -218,7 +218,7 @@ def linear_stability(config: RunConfig, law: Law) -> dict[str, Any]:
         try:
             sys8 = compare.eightdof_linear_system(config.vehicle, speed, law, config.belief,
                                                   config.law_options)
-            eig = _modes(sys8.eigenvalues)
+            eig = _modes(np.linalg.eigvals(sys8.A))
             out.update(_eig_columns("8dof_lin", eig))
         except (FourwsError, np.linalg.LinAlgError) as exc:
             notes.append(f"8dof linearized: {exc}")

@@ -114,7 +114,8 @@ def critical_speed_8dof_lin(vehicle: Any, law: Any, belief: Any, options: Any,
     from fourws_study.point import ZERO_MODE_PER_S
 
     def margin(u: float) -> float:
-        eig = compare.eightdof_linear_system(vehicle, u, law, belief, options).eigenvalues
+        eig = np.linalg.eigvals(compare.eightdof_linear_system(vehicle, u, law, belief,
+                                                              options).A)
         eig = eig[np.abs(eig) > ZERO_MODE_PER_S]
         return -float(np.max(eig.real))
 
