@@ -1,43 +1,43 @@
-"""ament_python package setup for fourws (also installs with plain pip into a venv)."""
+"""pip packaging of fourws (the venv of ``make setup``; a ROS workspace builds with CMake).
 
+The ROS package is the ament_cmake package of ``CMakeLists.txt``/``package.xml``; this file is
+only for pip. Its console scripts carry a ``fourws-`` prefix (``fourws-simulator``...): on a
+venv's PATH, generic names such as ``simulator`` or ``controller`` would collide with other
+tools. ``ros2 run fourws simulator`` is unaffected (CMake installs the unprefixed executables
+under ``lib/fourws``, where ``ros2 run`` looks).
+"""
+
+import runpy
+import xml.etree.ElementTree as ET
 from glob import glob
 
 from setuptools import find_packages, setup
 
 PACKAGE = "fourws"
+#: The version is package.xml's.
+VERSION = ET.parse("package.xml").getroot().findtext("version")
+#: Node name -> module, the one table (fourws_cli/nodes.py); read without importing fourws_cli.
+NODES = runpy.run_path("fourws_cli/nodes.py")["NODES"]
 
 setup(
     name=PACKAGE,
-    version="0.1.0",
-    packages=find_packages(include=["fourws_sim*", "fourws_control*", "fourws_run*",
-                                    "fourws_analysis*", "fourws_study*",
-                                    "fourws_ros*", "fourws_cli*"]),
+    version=VERSION,
+    packages=find_packages(include=["fourws_*"]),
     data_files=[
-        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
-        (f"share/{PACKAGE}", ["package.xml"]),
-        (f"share/{PACKAGE}/config/vehicles", glob("config/vehicles/*.yaml")),
-        (f"share/{PACKAGE}/config/maneuvers", glob("config/maneuvers/*.yaml")),
-        (f"share/{PACKAGE}/config/scenarios", glob("config/scenarios/*.yaml")),
-        (f"share/{PACKAGE}/config/studies", glob("config/studies/*.yaml")),
-        (f"share/{PACKAGE}/config/params", glob("config/params/*.yaml")),
-        (f"share/{PACKAGE}/config/dds", glob("config/dds/*.xml")),
+        (f"share/{PACKAGE}/config/{sub}", glob(f"config/{sub}/*.{ext}"))
+        for sub, ext in (("vehicles", "yaml"), ("maneuvers", "yaml"), ("scenarios", "yaml"),
+                         ("studies", "yaml"), ("params", "yaml"), ("dds", "xml"))
     ],
-    install_requires=["setuptools", "numpy", "scipy", "pyyaml"],
+    # the Python libraries the code imports (ROS wheels: requirements.txt; ROS: package.xml)
+    install_requires=["numpy", "scipy", "pyyaml", "numba", "control", "matplotlib", "rosbags",
+                      "mcap"],
     zip_safe=True,
     maintainer="fourws developers",
     maintainer_email="fourws@example.org",
     description="Real-time 4WS vehicle-dynamics simulator and analysis as a ROS 2 node graph",
     license="Apache-2.0",
     entry_points={
-        "console_scripts": [
-            "fourws = fourws_cli.main:main",
-            # one console script per node: `ros2 run fourws <node> --ros-args ...`
-            "simulator = fourws_ros.simulator_node:main",
-            "maneuver = fourws_ros.maneuver_node:main",
-            "controller = fourws_ros.controller_node:main",
-            "recorder = fourws_ros.recorder_node:main",
-            "replay = fourws_ros.replay_node:main",
-            "example_controller = fourws_ros.example_controller:main",
-        ],
+        "console_scripts": ["fourws = fourws_cli.main:main"]
+        + [f"fourws-{name} = {module}:main" for name, module in NODES.items()],
     },
 )

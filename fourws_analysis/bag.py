@@ -68,7 +68,7 @@ def make_message(msgtype: str, **values: Any) -> Any:
     Parameters
     ----------
     msgtype : str
-        rosbags type name, e.g. ``"fourws_msgs/msg/VehicleState"``.
+        rosbags type name, e.g. ``"fourws/msg/VehicleState"``.
     **values
         Field values to set; nested messages may be given as mappings.
     """

@@ -2,7 +2,7 @@
 
 Core side: ``Simulator.outputs()`` mappings (keys = the fields of ``VehicleState.msg``),
 :class:`fourws_sim.drivers.DriverCommand`, :class:`fourws_control.LawInput`. Message side: the
-``fourws_msgs`` types and the standard ``nav_msgs/Odometry``, ``sensor_msgs/Imu``,
+``fourws`` types and the standard ``nav_msgs/Odometry``, ``sensor_msgs/Imu``,
 ``rosgraph_msgs/Clock`` for RViz, Foxglove and PlotJuggler users.
 
 Times: a simulation time ``t`` in s becomes a ``builtin_interfaces/Time`` rounded to the
@@ -100,7 +100,7 @@ def state_msg(outputs: Mapping[str, Any], *, time_s: float, step: int, model: st
     NonFiniteError
         If any value is NaN or infinite (nothing non-finite leaves a node).
     """
-    from fourws_msgs.msg import VehicleState
+    from fourws.msg import VehicleState
 
     bad = outputs_finite(outputs)
     if bad:
@@ -133,7 +133,7 @@ def state_to_outputs(msg: Any) -> dict[str, Any]:
 # ---------------------------------------------------------------------------- driver input
 def driver_msg(cmd: Any, time_s: float, msg: Any = None) -> Any:
     """``DriverInput`` from a :class:`fourws_sim.drivers.DriverCommand` at ``time_s``."""
-    from fourws_msgs.msg import DriverInput
+    from fourws.msg import DriverInput
 
     values = cmd.to_dict()
     if not math.isfinite(values["steering_wheel_angle_rad"] + values["front_wheel_angle_rad"]
@@ -188,7 +188,7 @@ def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state_stamp_ns: 
                  state_step: int, msg: Any = None) -> Any:
     """``RearSteerCommand`` answering the state stamped ``state_stamp_ns`` (ns) with step
     ``state_step``."""
-    from fourws_msgs.msg import RearSteerCommand
+    from fourws.msg import RearSteerCommand
 
     if not (math.isfinite(angle_rad) and math.isfinite(rate_radps)):
         raise NonFiniteError(f"rear steer command of law {law} is not finite "

@@ -1,18 +1,18 @@
 """Example rear-steer controller: copy this file to write your own (see
 docs/controller-contract.md).
 
-It depends only on rclpy and the fourws_msgs interfaces — no fourws Python package — and
-implements the simplest 4WS law there is, a steering-ratio rear steer
-``delta_r = rear_ratio * delta_f`` (negative ratio: counter-phase), clipped to
+It depends only on rclpy and the fourws message interfaces (``fourws.msg``) — none of the
+fourws Python packages — and implements the simplest 4WS law there is, a steering-ratio rear
+steer ``delta_r = rear_ratio * delta_f`` (negative ratio: counter-phase), clipped to
 ``angle_limit_rad``. Replace :meth:`ExampleController.law` with yours.
 
 The contract it follows:
 
-1. Subscribe to ``/fourws/state`` (``fourws_msgs/VehicleState``) and
-   ``/fourws/driver_input`` (``fourws_msgs/DriverInput``), both reliable, keep last 2000.
+1. Subscribe to ``/fourws/state`` (``fourws/msg/VehicleState``) and
+   ``/fourws/driver_input`` (``fourws/msg/DriverInput``), both reliable, keep last 2000.
 2. For every state, once the driver input with the *same* ``header.stamp`` has arrived
    (lockstep: it always comes, right after the state), publish exactly one
-   ``fourws_msgs/RearSteerCommand`` on ``/fourws/rear_steer_cmd`` with
+   ``fourws/msg/RearSteerCommand`` on ``/fourws/rear_steer_cmd`` with
    ``state_step = state.step`` and ``state_stamp = state.header.stamp``.
 3. Never publish a non-finite angle or one beyond the vehicle's rear angle limit: the
    simulator ignores it and, after its command timeout, steers the rear wheels to zero.
@@ -29,7 +29,7 @@ import math
 import sys
 
 import rclpy
-from fourws_msgs.msg import DriverInput, RearSteerCommand, VehicleState
+from fourws.msg import DriverInput, RearSteerCommand, VehicleState
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node

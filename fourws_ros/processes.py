@@ -69,7 +69,7 @@ def ros_args(params_file: Path | None = None, params: dict[str, Any] | None = No
 
 def user_command(command: tuple[str, ...] | list[str]) -> list[str]:
     """A user's controller command made runnable: a ``.py`` file that is not executable runs
-    with this Python (the one with rclpy and fourws_msgs)."""
+    with this Python (the one with rclpy and the fourws messages)."""
     cmd = list(command)
     if cmd and cmd[0].endswith(".py") and not os.access(cmd[0], os.X_OK):
         cmd.insert(0, sys.executable)

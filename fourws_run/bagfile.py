@@ -46,9 +46,9 @@ from fourws_run.accounting import RunAccount, account_from_messages
 from fourws_sim.errors import FourwsError
 from fourws_sim.params import find_resource_dir
 
-#: Folder with the fourws ``.msg`` definitions.
-MSG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "msg", "fourws_msgs", "msg",
-                            "*.msg")
+#: Folder with the fourws ``.msg`` definitions (``share/fourws/msg`` once installed).
+MSG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "msg", interface.MSG_PACKAGE,
+                            "msg", "*.msg")
 #: rosbag2 metadata format version written.
 BAG_VERSION = 9
 #: ``custom_data`` keys of ``metadata.yaml`` written by the recorder.
@@ -89,9 +89,10 @@ def typestore() -> Any:
     """
     store = get_typestore(Stores.ROS2_KILTED)
     types: dict[str, Any] = {}
-    for path in sorted(MSG_DIR.glob("*.msg")):
-        types.update(get_types_from_msg(path.read_text(),
-                                        f"{interface.MSG_PACKAGE}/msg/{path.stem}"))
+    # the legacy package name too, so bags recorded before the rename still decode
+    for package in (interface.MSG_PACKAGE, *interface.LEGACY_MSG_PACKAGES):
+        for path in sorted(MSG_DIR.glob("*.msg")):
+            types.update(get_types_from_msg(path.read_text(), f"{package}/msg/{path.stem}"))
     store.register(types)
     return store
 

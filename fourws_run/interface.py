@@ -34,7 +34,7 @@ RUN_CONFIG = f"{NAMESPACE}/run_config"
 #: one message per node: a graph started by hand is self-describing too.
 NODE_CONFIG = f"{NAMESPACE}/node_config"
 CLOCK = "/clock"
-#: Recorder progress and accounting (``fourws_msgs/RecorderStatus``); lockstep flow control.
+#: Recorder progress and accounting (``fourws/msg/RecorderStatus``); lockstep flow control.
 #: Not recorded.
 RECORDER_STATUS = f"{NAMESPACE}/recorder_status"
 
@@ -42,8 +42,12 @@ RECORDER_STATUS = f"{NAMESPACE}/recorder_status"
 SRV_RESET = f"{NAMESPACE}/reset"
 SRV_PAUSE = f"{NAMESPACE}/pause"
 
-#: ROS package of the fourws message definitions (``msg/*.msg``).
-MSG_PACKAGE = "fourws_msgs"
+#: ROS package of the fourws message definitions (``msg/*.msg``): the ``fourws`` package itself
+#: generates them (one ament_cmake package, see docs/architecture.md).
+MSG_PACKAGE = "fourws"
+#: Earlier name of the message package (a separate ``fourws_msgs`` package before 0.2); bags
+#: recorded with it still decode (the bag tools register the definitions under both names).
+LEGACY_MSG_PACKAGES: tuple[str, ...] = ("fourws_msgs",)
 
 #: Message type of each topic, in rosbag2 spelling ``package/msg/Name``.
 TOPIC_TYPES: dict[str, str] = {
@@ -135,7 +139,8 @@ def time_to_ns(time_s: float) -> int:
 
 __all__ = [
     "CLOCK", "DRIVER_INPUT", "FRAME_BODY", "FRAME_ODOM", "IMU", "LATCHED_TOPICS",
-    "MANEUVER_COUNTED", "MANEUVER_STATUS", "MSG_PACKAGE", "NAMESPACE", "NODE_CONFIG",
+    "LEGACY_MSG_PACKAGES", "MANEUVER_COUNTED", "MANEUVER_STATUS", "MSG_PACKAGE", "NAMESPACE",
+    "NODE_CONFIG",
     "NODE_NAMES", "NS_PER_S", "N_WHEELS", "ODOM", "REAR_STEER_CMD", "RECORDED_TOPICS",
     "RECORDER_STATUS", "RUN_CONFIG", "Role", "SIMULATOR_COUNTED", "SIM_STATUS", "SRV_PAUSE",
     "SRV_RESET", "STATE", "STATE_SCALARS", "STATE_WHEELS", "TOPIC_TYPES", "WHEELS",
