@@ -6,38 +6,50 @@ QUIET := 2>&1 | { grep -v "^WARNING: Location" || true; }
 VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP := $(VENV)/bin/pip
+# the versions the tests passed with (`make lock` refreshes it from a clean install)
+LOCK := requirements.lock
 STAMP := $(VENV)/.fourws-setup-done
 MSGS_STAMP := $(VENV)/.fourws-msgs-done
-MSGS_BUILD := build/venv-fourws_msgs
+MSGS_BUILD := build/venv-interfaces
+LOCK_VENV := build/lock-venv
 
-.PHONY: setup test demo bench clean
+.PHONY: setup test demo bench lock clean
 
 setup: $(STAMP) $(MSGS_STAMP)
 
-$(STAMP): requirements.txt setup.py Makefile
+# One line per stage; the stage's own output goes to the terminal only when it fails.
+$(STAMP): requirements.txt $(LOCK) setup.py Makefile
 	@command -v python3 >/dev/null || { echo "python3 missing: apt-get install python3 python3-venv"; exit 1; }
 	@if ! command -v cmake >/dev/null || ! command -v g++ >/dev/null || ! python3 -c "import ensurepip" 2>/dev/null; then \
-	  echo "installing cmake, g++ and python3-venv from Debian"; \
-	  apt-get update -qq && apt-get install -y -qq cmake g++ python3-venv python3-dev >/dev/null; fi
-	test -x $(PY) || python3 -m venv $(VENV)
-	$(PIP) install -q --upgrade pip $(QUIET)
-	$(PIP) install -q -r requirements.txt $(QUIET)
-	$(PIP) install -q --no-deps -e . $(QUIET)
-	touch $(STAMP)
+	  echo "setup 1/4: installing cmake, g++ and python3-venv from Debian"; \
+	  apt-get update -qq && apt-get install -y -qq cmake g++ python3-venv python3-dev >/dev/null; \
+	else echo "setup 1/4: cmake, g++ and python3-venv are installed"; fi
+	@echo "setup 2/4: Python packages into $(VENV), versions from $(LOCK) (about 1 min the first time)"
+	@test -x $(PY) || python3 -m venv $(VENV)
+	@$(PIP) install -q --upgrade pip -c $(LOCK) $(QUIET)
+	@$(PIP) install -q -r requirements.txt -c $(LOCK) $(QUIET)
+	@echo "setup 3/4: fourws itself (editable, from this checkout)"
+	@$(PIP) install -q --no-deps -e . >$(VENV)/fourws-install.log 2>&1 \
+	  || { cat $(VENV)/fourws-install.log; exit 1; }
+	@touch $(STAMP)
 
-# fourws_msgs (ament_cmake interface package) built against the ROS wheels, installed into the
-# venv prefix so the generated messages import with no extra environment. Rebuilt when a .msg
-# or the package files change (or after the venv was reinstalled).
-$(MSGS_STAMP): $(STAMP) $(wildcard msg/*.msg) fourws_msgs/CMakeLists.txt fourws_msgs/package.xml
-	rm -rf $(MSGS_BUILD) && mkdir -p $(MSGS_BUILD)
-	V=$(abspath $(VENV)); PATH=$$V/bin:$$PATH CMAKE_PREFIX_PATH=$$V AMENT_PREFIX_PATH=$$V \
-	  cmake -S fourws_msgs -B $(MSGS_BUILD) -DCMAKE_INSTALL_PREFIX=$$V \
+# The message interfaces (the ament_cmake package of CMakeLists.txt, interfaces only) built
+# against the ROS wheels and installed into the venv prefix, so the generated messages import
+# with no extra environment. Rebuilt when a .msg or the package files change (or after the
+# venv was reinstalled).
+$(MSGS_STAMP): $(STAMP) $(wildcard msg/*.msg) CMakeLists.txt package.xml
+	@echo "setup 4/4: message interfaces (CMake against the ROS wheels, about 30 s; log $(MSGS_BUILD)/build.log)"
+	@rm -rf $(MSGS_BUILD) && mkdir -p $(MSGS_BUILD)
+	@V=$(abspath $(VENV)); PATH=$$V/bin:$$PATH CMAKE_PREFIX_PATH=$$V AMENT_PREFIX_PATH=$$V \
+	  cmake -S . -B $(MSGS_BUILD) -DCMAKE_INSTALL_PREFIX=$$V -DFOURWS_INTERFACES_ONLY=ON \
 	  -DPython3_EXECUTABLE=$$V/bin/python -DBUILD_TESTING=OFF >$(MSGS_BUILD)/build.log 2>&1 \
 	  && PATH=$$V/bin:$$PATH cmake --build $(MSGS_BUILD) -j2 >>$(MSGS_BUILD)/build.log 2>&1 \
 	  && cmake --install $(MSGS_BUILD) >>$(MSGS_BUILD)/build.log 2>&1 \
-	  || { tail -30 $(MSGS_BUILD)/build.log; echo "fourws_msgs build failed, log: $(MSGS_BUILD)/build.log"; exit 1; }
-	cd /tmp && $(abspath $(PY)) -c "from fourws_msgs.msg import VehicleState" # fail here if not importable
-	touch $(MSGS_STAMP)
+	  || { tail -30 $(MSGS_BUILD)/build.log; echo "message interface build failed, log: $(MSGS_BUILD)/build.log"; exit 1; }
+	@cd /tmp && $(abspath $(PY)) -c "from fourws.msg import VehicleState" \
+	  || { echo "the built messages do not import (from fourws.msg import VehicleState)"; exit 1; }
+	@touch $(MSGS_STAMP)
+	@echo "setup done: $(VENV)/bin/fourws --help"
 
 test: setup
 	$(PY) -m pytest -q test
@@ -47,6 +59,19 @@ demo: setup
 
 bench: setup
 	$(VENV)/bin/fourws bench --json
+
+# Refresh $(LOCK): a clean install of requirements.txt (no constraints) into a new venv, frozen.
+# Commit the result once `make test` passes with it.
+lock:
+	@echo "lock: clean install of requirements.txt into $(LOCK_VENV)"
+	@rm -rf $(LOCK_VENV) && python3 -m venv $(LOCK_VENV)
+	@$(LOCK_VENV)/bin/pip install -q --upgrade pip $(QUIET)
+	@$(LOCK_VENV)/bin/pip install -q -r requirements.txt $(QUIET)
+	@{ echo "# Versions installed by \`make setup\` (pip constraints). Produced by \`make lock\` from a"; \
+	  echo "# clean install of requirements.txt with $$($(LOCK_VENV)/bin/python -V); do not edit."; \
+	  $(LOCK_VENV)/bin/pip freeze --all; } > $(LOCK)
+	@rm -rf $(LOCK_VENV)
+	@echo "lock: wrote $(LOCK) ($$(grep -c "==" $(LOCK)) pins); run make setup test"
 
 clean:
 	rm -rf build install log runs report
