@@ -1,7 +1,9 @@
 """``fourws node NAME [--ros-args ...]``: run one node of the graph in this process.
 
-The same nodes are console scripts of the ament_python package (``ros2 run fourws NAME``);
-in the project venv, where the ``ros2`` CLI does not exist, this is how they are started.
+:data:`NODES` is the one table of the nodes: CMakeLists.txt installs an executable per entry
+under ``lib/fourws`` (``ros2 run fourws NAME``) and setup.py a console script ``fourws-NAME``
+(the venv, where the ``ros2`` CLI does not exist). Both read it without importing fourws, so
+this module imports nothing but the standard library at its top.
 """
 
 from __future__ import annotations
