@@ -23,9 +23,6 @@ from launch_ros.actions import Node
 PACKAGE = "fourws"
 #: The shipped parameter file of each clock mode (in share/fourws/config/params).
 PARAMS_FILES = {"lockstep": "lockstep.yaml", "realtime": "realtime.yaml"}
-#: Lockstep flow control: how far (messages) the simulator may run ahead of what the recorder
-#: stored (fourws_ros.node_params.RECORDER_WINDOW, the value `fourws run` uses).
-RECORDER_WINDOW = 50
 
 
 def _nodes(context: object) -> list[Node]:
@@ -34,11 +31,10 @@ def _nodes(context: object) -> list[Node]:
     params_file = LaunchConfiguration("params_file").perform(context) or os.path.join(
         get_package_share_directory(PACKAGE), "config", "params", PARAMS_FILES[clock])
     simulator = {}
-    if clock == "lockstep":
-        # the simulator starts once all its state subscribers are there (maneuver, controller
-        # and the recorder), and never runs further ahead of the recorder than its window
-        simulator = {"expected_state_subscribers": 3 if record else 2,
-                     "recorder_window": RECORDER_WINDOW if record else 0}
+    if clock == "lockstep" and not record:
+        # the shipped file waits for the recorder too (3 state subscribers) and runs at most
+        # recorder_window messages ahead of it: without a recorder, neither
+        simulator = {"expected_state_subscribers": 2, "recorder_window": 0}
     nodes = [
         Node(package=PACKAGE, executable="simulator", name="fourws_simulator",
              parameters=[params_file, simulator], output="screen"),

@@ -14,7 +14,7 @@ import math
 import sys
 
 import rclpy
-from fourws_msgs.msg import DriverInput, RearSteerCommand, VehicleState
+from fourws.msg import DriverInput, RearSteerCommand, VehicleState
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
@@ -47,7 +47,7 @@ class ContractController(Node):
         self.create_subscription(String, "/fourws/run_config", self.on_config, LATCHED)
         self.create_subscription(VehicleState, "/fourws/state", self.on_state, STREAM)
         self.create_subscription(DriverInput, "/fourws/driver_input", self.on_driver, STREAM)
-        from fourws_msgs.msg import SimulatorStatus
+        from fourws.msg import SimulatorStatus
         self.create_subscription(SimulatorStatus, "/fourws/sim_status", self.on_status, STATUS)
         self.done = False
 

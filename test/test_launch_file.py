@@ -4,7 +4,7 @@ and shipped parameter files of ``fourws run``'s graph.
 launch and launch_ros are not on PyPI, so the file is read (``ast``), not run. Sources: the
 node table fourws_cli/nodes.py (what CMakeLists.txt installs under lib/fourws), the roles and
 node names of fourws_run.interface, the parameter files in config/params, and
-fourws_ros.node_params (what ``fourws run`` gives each node).
+the node names the files configure.
 """
 
 from __future__ import annotations
@@ -16,7 +16,6 @@ import pytest
 import yaml
 
 from fourws_cli.nodes import NODES
-from fourws_ros.node_params import RECORDER_WINDOW
 from fourws_run.interface import NODE_NAMES, Role
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -64,5 +63,4 @@ def test_launch_uses_the_shipped_parameter_files(launch) -> None:
         for call in calls:
             assert "ros__parameters" in params[call["name"]], (name, call["name"])
         assert params[NODE_NAMES[Role.SIMULATOR]]["ros__parameters"]["clock_mode"] == clock
-    assert constants["RECORDER_WINDOW"] == RECORDER_WINDOW
 
