@@ -104,8 +104,12 @@ def bag_typestore(schemas: Mapping[str, tuple[str, bytes]]) -> Any:
     :func:`typestore`.
     """
     key = tuple(sorted((name, bytes(data)) for name, (enc, data) in schemas.items()
-                       if enc == "ros2msg" and name.startswith(f"{interface.MSG_PACKAGE}/")))
+                       if enc == "ros2msg" and name.startswith(_OWN_PREFIXES)))
     return _bag_typestore(key) if key else typestore()
+
+
+#: Type name prefixes of the fourws messages, the current package's and the former one's.
+_OWN_PREFIXES = tuple(f"{p}/" for p in (interface.MSG_PACKAGE, *interface.LEGACY_MSG_PACKAGES))
 
 
 @lru_cache(maxsize=16)
@@ -113,13 +117,14 @@ def _bag_typestore(key: tuple[tuple[str, bytes], ...]) -> Any:
     store = get_typestore(Stores.ROS2_KILTED)
     own = dict(key)
     types: dict[str, Any] = {}
-    for path in sorted(MSG_DIR.glob("*.msg")):
-        name = f"{interface.MSG_PACKAGE}/msg/{path.stem}"
-        if name not in own:
-            types.update(get_types_from_msg(path.read_text(), name))
+    for package in (interface.MSG_PACKAGE, *interface.LEGACY_MSG_PACKAGES):
+        for path in sorted(MSG_DIR.glob("*.msg")):
+            name = f"{package}/msg/{path.stem}"
+            if name not in own:
+                types.update(get_types_from_msg(path.read_text(), name))
     for name, data in own.items():
         types.update({k: v for k, v in get_types_from_msg(data.decode(), name).items()
-                      if k.startswith(f"{interface.MSG_PACKAGE}/")})
+                      if k.startswith(_OWN_PREFIXES)})
     store.register(types)
     return store
 
@@ -214,7 +219,7 @@ class BagWriter:
         self.path = Path(path)
         try:
             self._writer = _Writer(self.path, version=BAG_VERSION,
-                                           storage_plugin=StoragePlugin.MCAP)
+                                   storage_plugin=StoragePlugin.MCAP)
         except WriterError as exc:
             raise BagError(f"cannot create bag {str(self.path)!r}: {exc}") from None
         self._connections: dict[str, Any] = {}
@@ -659,6 +664,7 @@ def repair_bag(path: str | Path) -> RepairResult:
 
 
 __all__ = ["BAG_VERSION", "BagCheck", "BagError", "BagWriter", "CHUNK_BYTES", "KEY_ACCOUNTING",
-           "KEY_COMPLETE", "MSG_DIR", "McapScan", "RawMessage", "RepairResult", "bag_typestore", "mcap_files",
+           "KEY_COMPLETE", "MSG_DIR", "McapScan", "RawMessage", "RepairResult", "bag_typestore",
+           "mcap_files",
            "metadata_counts", "read_bag", "read_metadata", "repair_bag", "scan_mcap",
            "typestore", "verify_bag"]
