@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 # fourws: `make demo` and `make test` are all a newcomer needs (see README.md).
 SHELL := /bin/bash
 .SHELLFLAGS := -o pipefail -c

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """pip packaging of fourws (the venv of ``make setup``; a ROS workspace builds with CMake).
 
 The ROS package is the ament_cmake package of ``CMakeLists.txt``/``package.xml``; this file is

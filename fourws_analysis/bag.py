@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Recorded runs as arrays: the one bag-to-arrays loader of the analysis, and resampling.
 
 A recorded run is a rosbag2 bag (MCAP storage) holding the topics of

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Analysis of recorded runs: which metrics a run can give, computed, and compared.
 
 :func:`analyze_run` recognizes the maneuver from the run configuration and computes what it

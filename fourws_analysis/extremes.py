@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """How far a run went: peak sideslip, yaw rate and lateral acceleration, time the rear
 actuator spent at its limits, and whether the car spun.
 

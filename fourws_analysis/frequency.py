@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Frequency response of recorded runs and of linear models (ISO 7401 frequency domain).
 
 Estimated response (H1 estimator, Welch-averaged spectra, Hann windows, 50 % overlap):

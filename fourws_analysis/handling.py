@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Steady-state handling of the 2-DOF vehicle with and without a rear-steer law (ch. 4.5).
 
 Front-wheel steering (Wong; Bernard et al.): the constant-speed test slope is

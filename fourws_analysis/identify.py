@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Dominant eigenvalues identified from transient responses of a recorded run.
 
 Every output of a linear(ized) vehicle shares the characteristic polynomial of its state

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""ISO 4138 steady-state circular driving from quasi-steady runs.
 
 At steady state a car turning with path curvature :math:`\kappa = r/U` at lateral

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""ISO 7401 step-steer (lateral transient response) metrics from a recorded run.
 
 Time reference ``t0``: the instant the steering input passes 50 % of its step (ISO 7401).

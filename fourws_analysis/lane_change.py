@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """ISO 3888-2 lane change: clearance to the cones and pass/fail, from the driven path.
 
 A run passes when the car drove through every gated section of the course and its body (the

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Linear analysis of the linear vehicle models closed with a rear-steer law.
 
 Closing the loop

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Numerical linearization of any fourws model about a trim, and eigenvalues vs speed.
 
 Central finite differences of the model's ``derivatives(t, x, u, p)``:

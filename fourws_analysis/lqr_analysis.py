@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""LQR rear-steer gains versus weight and speed (chapter 3, Figures 3.2-3.26), as data and plots.
 
 Gains are reported as the paper plots them: :math:`K` of :math:`\delta_r = -K x` in the design

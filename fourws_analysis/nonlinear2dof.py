@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Lateral stability of the nonlinear cubic-tire 2-DOF vehicle (Samsundar 1996, chapter 7).
 
 Model: :mod:`fourws_sim.models.cubic2dof` at constant forward speed U and zero steer

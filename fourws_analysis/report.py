@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The self-contained HTML report of analysed runs: :func:`write_report` writes
 ``DIR/index.html``, the PNG plots next to it (:mod:`fourws_analysis.report_figures`) and
 ``DIR/metrics.json`` with every metric.

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The report's figures (matplotlib, Agg): ``figure_*`` build a figure from
 :class:`~fourws_analysis.compare.RunAnalysis` results (tests inspect what is drawn),
 ``plot_*`` save it as PNG. One colour per run in every figure; legends sit outside the

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The report's texts: what the gains are per, how the laws are compared, the modes right of
 the imaginary axis and why identified eigenvalues differ from the models' (plain strings from
 :class:`~fourws_analysis.compare.RunAnalysis` results; no plotting, no HTML).

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Tire characteristic curves in the axes of the paper's Figures C.1 and C.2.
 
 Figure C.1: normalized lateral force ``Fy/Fz`` against slip angle (0-20 deg) for longitudinal

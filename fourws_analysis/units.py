@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Names and units of the quantities the analysis reports: the one table behind every report
 table, plot label and ``metrics.json`` key.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Bounds of the numbers given on the command line (one place for every subcommand).
 
 A value outside its bounds is a :class:`~fourws_sim.errors.ParameterError` naming the option,

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Shared command-line options for choosing a rear-steer law and the controller's belief."""
 
 from __future__ import annotations

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws analyze BAG... [--report DIR] [--json]``: metrics and report of recorded runs."""
 
 from __future__ import annotations

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws bag verify BAG...`` / ``fourws bag repair BAG...``: check and mend recorded bags.
 
 ``verify`` checks every chunk's checksum, the data section's checksum, the metadata's counts

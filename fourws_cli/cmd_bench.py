@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws bench [--json]``: speed of the 8-DOF real-time simulator (RK4, 1 ms, one core)."""
 
 from __future__ import annotations

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws bench-graph [--json]``: speed of the real node graph (lockstep and realtime).
 
 * lockstep: the default scenario's step steer stretched to ``--lockstep-seconds`` with law

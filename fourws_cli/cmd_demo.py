@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws demo``: the default scenario through the real node graph, then the report.
 
 Runs ``config/scenarios/default.yaml`` (step steer at 85 km/h on the 8-DOF ``table_8_1`` car)

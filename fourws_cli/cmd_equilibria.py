@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws equilibria``: equilibria and stability region of the cubic-tire 2-DOF model (ch. 7).
 
 Output (``--json``)::

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws handling``: steady-state handling of the 2-DOF vehicle, FWS versus a law (ch. 4.5).
 
 Output (``--json``; keys are stable)::

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws linear``: eigenvalues, damping, Routh-Hurwitz, steady-state gains of a linear model
 closed with a rear-steer law.
 

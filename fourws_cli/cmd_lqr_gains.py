@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws lqr-gains``: LQR rear-steer gains versus speed and sideslip weight (ch. 3).
 
 Output (``--json``; keys are stable)::

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws replay BAG [--topics T ...] [--rate R] [--mode timed|answer]``: play a recorded bag
 into a running graph (on the current ``ROS_DOMAIN_ID``), e.g. a recorded driver input into a
 new run with another controller. See :mod:`fourws_ros.replay_node`.

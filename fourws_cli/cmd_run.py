@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws run [SCENARIO] [--law NAME ...] [--controller CMD] [--out DIR]``: run a scenario
 through the node graph.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws tire-curves``: normalized lateral tire force in the axes of Figures C.1 and C.2.
 
 Output (``--json``)::

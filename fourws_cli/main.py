@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Entry point of the ``fourws`` command.
 
 Each subcommand is a module ``fourws_cli/cmd_<name>.py`` exposing::

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws node NAME [--ros-args ...]``: run one node of the graph in this process.
 
 :data:`NODES` is the one table of the nodes: CMakeLists.txt installs an executable per entry

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """fourws rear-wheel steering control laws (no rclpy).
 
 ``make_law(name, belief_vehicle, **options)`` builds a law (``make_loop_law`` for a loop with

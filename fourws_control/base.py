@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Common interface of the rear-wheel steering laws, and the rear-steer actuator.
 
 Every law in fourws is linear in the measured signals with gains scheduled on the forward

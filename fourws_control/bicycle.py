@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The 2-DOF (bicycle) parameters of a vehicle, as the closed-form laws and the handling
 analysis use them."""
 

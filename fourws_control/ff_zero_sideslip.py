@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""``ff_zero_sideslip``: Sano-style feed-forward, zero steady-state sideslip (eq. 4.13, Kr = 0).
 
 :math:`\delta_r = K_{sf}(U)\,\delta_f` with the ratio that makes the steady-state lateral

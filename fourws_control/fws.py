@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fws``: front-wheel steering only, the rear wheels stay straight (delta_r = 0)."""
 
 from __future__ import annotations

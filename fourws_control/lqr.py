@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""``lqr``: chapter 3 optimal rear steer minimizing sideslip (linear quadratic regulator).
 
 For a linear model :math:`\dot x = A x + B_r \delta_r + \dots` (the rear-steer column of the

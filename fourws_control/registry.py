@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The one place rear-steer laws are registered: name -> ``module:Class``.
 
 A new law is one module (a :class:`fourws_control.base.Law` subclass) plus one line here.

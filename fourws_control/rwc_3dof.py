@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Chapter 6 laws designed on the linear 3-DOF roll model (``fourws_sim.models.roll3dof``).
 
 Signs are fourws': roll :math:`\phi` positive right side down (a left turn rolls to positive

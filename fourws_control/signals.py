@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The signals a law may use, and where each sits in a model's state/input vectors.
 
 A law is ``delta_r = sum_s k_s * signal_s`` (:class:`Signal`). To close a model with it

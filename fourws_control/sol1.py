@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""``sol1``: chapter 4 Solution 1 (Table 4.2), zero yaw-rate/lateral-acceleration phase lag.
 
 :math:`\delta_r = K_{sf}\,\delta_f + K_r U r` with

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""``sol2``: chapter 4 Solution 2 (Table 4.2), the second root of the zero phase-lag condition.
 
 :math:`\delta_r = K_{sf}\,\delta_f + K_r U r` with

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Fast decoding and encoding of the graph's hot-path messages as raw CDR bytes.
 
 Lockstep runs are bounded by the per-tick cost of the answer chain simulator -> maneuver ->

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Controller node: any rear-steer law of :mod:`fourws_control`, answering each vehicle state.
 
 For every ``VehicleState`` it publishes one ``RearSteerCommand`` (``state_step`` = the state's

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The one place that converts ROS messages <-> fourws core structures.
 
 Core side: ``Simulator.outputs()`` mappings (keys = the fields of ``VehicleState.msg``),

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """ROS domains of fourws runs: one per run, exclusive on this machine, discovery kept local.
 
 A run's processes talk on one ROS domain with discovery limited to this machine

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Example rear-steer controller: copy this file to write your own (see
 docs/controller-contract.md).
 

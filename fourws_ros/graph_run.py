@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """One run through the real node graph, accounted for: what ``fourws run`` does.
 
 :func:`run_graph` takes a :class:`~fourws_run.config.RunConfig`, starts the node processes on

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Who published a message: the publishing node's name, from rclpy message info and the graph.
 
 rclpy hands a subscription callback that takes two arguments the message info, which holds the

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Maneuver node: plays a maneuver of ``config/maneuvers`` as driver input, one per state.
 
 For every ``VehicleState`` of the run (states that do not continue the simulator's own

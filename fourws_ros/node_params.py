@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The ROS parameters of each node of a run, from its :class:`~fourws_run.config.RunConfig`.
 
 :func:`node_parameters` is the only translation from a run description to node parameters;

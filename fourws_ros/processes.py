@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The node processes of a run: start, watch, stop -- without orphans.
 
 Each node runs as its own OS process in its own process group, with a log file. Shutdown is by

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Recorder node: writes the run's topics to a rosbag2 bag (MCAP) and accounts for every message.
 
 What it stores

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Replay node: plays a recorded bag back into the graph.
 
 Two modes (parameter ``mode``):

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """What every fourws node reports about itself: counted publishers, the node's configuration,
 the accounting fields of the status messages, and delivery before exit.
 

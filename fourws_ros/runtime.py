@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """What every fourws node's ``main()`` shares: init, signals, spinning, clean shutdown.
 
 A node process ends in one of four ways, with a distinct exit code the launcher reports:

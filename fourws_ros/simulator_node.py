@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Simulator node: the vehicle model of a run, publishing its state and taking the answers.
 
 The node is an adapter: the tick sequence, the trust rules for incoming messages, realtime

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """QoS profiles of the fourws graph, on the names of :mod:`fourws_run.interface`.
 
 Topic names, message types, frames and roles are defined once in :mod:`fourws_run.interface`

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Recording accounting: what the run's nodes published against what the bag holds.
 
 A run is complete when, for every recorded topic, the bag holds exactly the messages the

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """rosbag2 bags as fourws writes, checks and repairs them (MCAP storage, no rclpy).
 
 A fourws bag is a rosbag2 directory (format version 9): ``metadata.yaml`` and one ``.mcap``

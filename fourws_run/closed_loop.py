@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Offline closed-loop runner: the exact twin of the lockstep ROS node graph.
 
 :func:`run_closed_loop` runs one maneuver with one rear-steer law on one vehicle model without

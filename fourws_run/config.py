@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The one description of a run: :class:`RunConfig`.
 
 A run is one vehicle (and the controller's belief of it), one maneuver, one rear-steer law or

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The interface of the fourws graph, named once: topics, message types, frames, roles.
 
 Everything that crosses a process boundary is spelled here and nowhere else: the ROS layer

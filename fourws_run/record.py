@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The record of one graph run: its outcome, its accounting, what went wrong and where.
 
 :class:`RunRecord` is what ``fourws run`` prints (:meth:`RunRecord.summary_lines`), returns as

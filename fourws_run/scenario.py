@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Run scenarios: which vehicle, maneuver, laws, model, clock and recording, from YAML.
 
 A scenario file (``config/scenarios/<name>.yaml``)::

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """ISO 7401 step steer at a target steady lateral acceleration: the amplitude per law.
 
 ISO 7401 runs the step at a lateral acceleration (e.g. 4 m/s^2), not at an angle, so laws that

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The tick sequence of a fourws run, without ROS: one implementation for the node graph and the
 offline twin.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Speed benchmark of the real-time simulator (``fourws bench``).
 
 Runs the 8-DOF model of one vehicle (default ``table_8_1``) with its STI tire, RK4 at 1 ms,

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""The widest-margin reference line through a course of gated lanes (ISO 3888 lane changes).
 
 A test driver walks an ISO 3888-2 course before driving it and picks the line that keeps the

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Driver models: the speed-hold driver and a single-point preview path follower.
 
 A maneuver (:mod:`fourws_sim.maneuvers`) combines an open-loop steering waveform or a path

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Package exceptions of fourws.
 
 Every error a user can cause (a bad file, a bad name, a bad number) is raised as one of

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Time integrators, chosen by name: ``rk4`` (fixed step), ``euler`` (fixed step) and
 ``solve_ivp`` (SciPy adaptive reference).
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Vehicle parameters: frozen, validated dataclasses per subsystem, loaded from YAML.
 
 A vehicle file (``config/vehicles/<name>.yaml``) is a mapping with one key per subsystem::

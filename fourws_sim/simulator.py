@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The real-time simulator: one vehicle model, one integrator, a fixed step.
 
 ::

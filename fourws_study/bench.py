@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Speed of studies (``fourws bench --study``): closed-loop vehicle-steps per second.
 
 A vehicle-step is one 1-ms RK4 step of the 8-DOF model (STI tire) inside a closed loop whose

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Running a study: blocks of points as tasks, on this machine's cores or on Dask.
 
 A task is one block (:meth:`fourws_study.store.StudyStore.block_points`):

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """One closed-loop run of a study point: compiled where it can be, the interpreted twin
 otherwise, the same numbers either way.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Numba kernel of one whole closed-loop run of the offline twin, for one tire model.
 
 Do not import this module directly: :func:`fourws_study.kernel.loop_kernel_for` loads it once

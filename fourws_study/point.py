@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """What one study point computes: its run, the metrics of ``fourws analyze``, how far it went,
 its status, and the linear closed-loop eigenvalues at its speed.
 

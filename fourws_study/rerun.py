@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """A study point again, through the real node graph: its run description, the row of its bag,
 and how that row compares with the study's.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Study files: a base run and the axes it is swept over, validated before anything runs.
 
 A study file (``config/studies/<name>.yaml``)::

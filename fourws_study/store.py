@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """A study's output folder: blocks of results written as they finish, the merged table, and
 what was run.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The fourws node graph on a system ROS 2 install: ``ros2 launch fourws fourws.launch.py``.
 
 Starts the node set of ``fourws run`` -- simulator, maneuver, controller and recorder -- with

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Shared pytest fixtures.
 
 ``ros_domain``: a ROS domain ID reserved for one test (no other fourws test or run on this

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """A rear-steer controller written from docs/controller-contract.md alone (no fourws import):
 the test of the contract. It reads the vehicle it controls from /fourws/run_config and runs
 the zero-sideslip feed-forward of the linear single-track model on the belief vehicle,

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """A rogue ROS node for the fault tests: publishes what no node of a fourws run sends.
 
 Run as ``python rogue_node.py KIND SECONDS`` on the run's ROS domain; ``KIND``:

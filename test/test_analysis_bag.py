@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Bag typestore, writer, reader and resampling (fourws_analysis/bag.py)."""
 
 from __future__ import annotations

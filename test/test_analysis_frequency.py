@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Frequency response from recorded runs (fourws_analysis/frequency.py)."""
 
 from __future__ import annotations

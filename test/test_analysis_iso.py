@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """ISO 7401 step metrics, ISO 4138 understeer gradient, eigenvalue identification and
 numerical linearization (fourws_analysis/iso7401.py, iso4138.py, identify.py, linearize.py)."""
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """`fourws analyze` end to end: report, metrics.json, bad input (fourws_analysis/report.py,
 compare.py, fourws_cli/cmd_analyze.py)."""
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """House-style guarantees: the core imports no rclpy and no message types.
 
 Source of the rule: docs/architecture.md (core packages are plain Python so they are testable and

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """What the restructuring of the run layer must not change: the recorded numbers.
 
 Pinned before the change, at commit fd6e3f7 (the graph of the previous structure): the SHA-256

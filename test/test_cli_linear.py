@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws linear``, ``fourws handling``, ``fourws lqr-gains``: stable JSON keys carrying the
 paper's numbers (Table 4.3, eq. 4.93, U_ss = 12.99 m/s), readable tables, one-line errors."""
 

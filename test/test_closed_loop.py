@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The offline closed-loop runner: the tick sequence, the drivers on the 8-DOF model, and
 agreement with analytic steady states of the linear models."""
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Property-based mutation of the shipped vehicle, maneuver, scenario and parameter files.
 
 Each example changes one thing in a shipped file (see ``test/config_mutation.py``: values

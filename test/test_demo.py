@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """`make demo` is `fourws demo`: the default scenario's three laws through the real graph,
 then the report. A newcomer's first command must work as the README says."""
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Every import of the code is declared: in package.xml with its rosdep key (a ROS workspace:
 ``rosdep install --from-paths src --ignore-src``), in requirements.txt (the venv of
 ``make setup``) and, for the Python libraries of the runtime, in setup.py (pip).

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Nonlinear 8-DOF model (ch. 8) and its default vehicle table_8_1.
 
 Sources of the numbers asserted here:

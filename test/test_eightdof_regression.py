@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Regression pin of the 8-DOF model and its tires (pre-optimization outputs).
 
 Source of every number in this file: the model's own earlier output. The trajectories and tire

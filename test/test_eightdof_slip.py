@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Slips of the 8-DOF model with light and heavy wheels, and the F1TENTH scale car.
 
 Sources of the numbers asserted here:

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The node graph under attack: rogue publishers, killed and stopped nodes, runs side by side
 under a CPU hog. Every case ends in a complete, exact record or a failure naming the cause.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """A graph started by hand, node by node with the shipped parameter file (what a ROS 2 user
 does with `ros2 run`), gives a bag as good as `fourws run`'s: complete, self-describing, and
 analysable with the right law's name; the run ends by itself when the maneuver is done."""

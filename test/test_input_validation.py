@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Bad input from files and command lines: one test per class of error.
 
 Every bad input ends in one line naming the field and the file (a

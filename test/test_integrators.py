@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Integrators: orders of accuracy against analytic solutions, registry and bad input.
 
 Sources: the exact solution of the linear ODE x' = A x + B u (matrix exponential), the global

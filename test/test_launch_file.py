@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """launch/fourws.launch.py names what exists: the executables CMake installs, the node names
 and shipped parameter files of ``fourws run``'s graph.
 

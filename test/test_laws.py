@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Rear-steer laws: registry, defining properties from the paper, low speed, actuator, belief.
 
 Sources: Samsundar (1996) ch. 4 (Solution 1 decouples V, eq. 4.49, time constant 0.58 s;

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Bags recorded before the messages moved into the fourws package (type names
 ``fourws_msgs/msg/...``, fourws 0.1 with a separate interface package) still load.
 

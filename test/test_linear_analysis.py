@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Linear analysis: Table 4.3, analytic eigenvalues, critical speeds, Routh-Hurwitz, Lyapunov,
 transfer functions, steady state, handling (Samsundar 1996 ch. 3-6).
 

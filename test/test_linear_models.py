@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Linear vehicle models (2dof, 2dof-free, 2dof-lagged, 3dof) and the cubic model's
 linearization: the paper's eigenvalues and critical speeds, analytic steady states, and
 agreement between model levels."""

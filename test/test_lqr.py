@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """LQR rear steer (Samsundar 1996 ch. 3): trends of Figures 3.2, 3.5, 3.6, 3.13-3.15, agreement
 with python-control's ``lqr``/``dlqr``, the gain schedule, the design for the sampled loop
 (zero-order hold at the control period), and weight validation."""

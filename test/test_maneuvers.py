@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Maneuver inputs against their analytic definitions, the drivers' laws, the ISO 3888-2 track,
 and the validation of maneuver files."""
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Chapter 7: equilibria, Lyapunov/tangency estimate and trajectory-reversal stability region
 of the cubic-tire 2-DOF vehicle, checked against Tables 7.2-7.4; the ``fourws equilibria``
 command."""

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Shipped folders are found both in a checkout and in an installed package.
 
 Source: the install layout of setup.py's ``data_files`` and of rosidl (``share/<package>/...``

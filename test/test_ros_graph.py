@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """End-to-end tests of the fourws node graph: real nodes, separate processes, isolated domain.
 
 Every run goes through :func:`fourws_ros.graph_run.run_graph` (what ``fourws run`` does), which

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Tests of single fourws nodes: recorder durability, parameter validation, simulator safety.
 
 In-process tests create the node in the test process (on a reserved ROS domain, discovery on

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Every rear-steer law in the loop it runs in: the 8-DOF car of chapter 8 (table_8_1), the law
 sampled at the 100 Hz default control rate and held by the 5 deg / 30 deg/s actuator
 (fourws_run.closed_loop, the offline twin of the lockstep node graph).

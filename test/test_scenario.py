@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Scenario files: the default scenario, round trips, belief vehicles and bad input."""
 
 from __future__ import annotations

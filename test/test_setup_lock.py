@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``make setup`` installs the versions of requirements.lock (the ones the tests passed with).
 
 Source: requirements.lock (``make lock``: a clean install of requirements.txt, frozen) and the

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Simulator: the VehicleState contract, inputs, errors, and the linear models through it.
 
 Sources: msg/VehicleState.msg (the output fields), statics (normal loads at rest), the 2-DOF

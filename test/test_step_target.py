@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """ISO 7401 step at a target steady lateral acceleration (fourws_run.step_target:
 find_step_amplitude, resolve_maneuver_for_law, scenario_for_law, run_scenario).
 

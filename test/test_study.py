@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """fourws study: points equal the offline twin, seeds reproduce, backends agree, a killed study
 resumes exactly, the stability boundary agrees with the critical speeds, bad study files are
 one-line errors, and a point rerun through the node graph gives the study's row.

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The tick sequence's trust rules, pacing and flow control (fourws_run.ticks), without ROS.
 
 Every case here is one a rogue or broken node produced against the graph (issue reports):

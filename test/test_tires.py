@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Tests of the tire models (linear, STI of Appendix C, Magic Formula) and the tire curves.
 
 Sources of the asserted numbers:

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The user's own controller through `fourws run --controller`: a node written from
 docs/controller-contract.md alone (test/contract_controller.py) runs in place of fourws's,
 and its commands, recomputed from the bag with the law it documents, match to 1e-12."""

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The paper's chapter 3-7 vehicle files: each value checked against the paper's own
 statements and numbers, each cites its table; and one test per class of bad vehicle file."""
 

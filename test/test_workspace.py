@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The ROS 2 workspace flow, as a ROS user types it, from ``ws/src/fourws``: ``colcon build``
 (no flags), ``source install/setup.bash``, the installed node executables with the installed
 parameter file, and ``colcon test``.

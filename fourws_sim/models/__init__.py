@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Vehicle models: one module per model, looked up by name.
 
 Every model module exposes ``STATE`` and ``INPUT`` (``IntEnum``), ``params_for`` and

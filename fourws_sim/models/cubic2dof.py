@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Nonlinear 2-DOF bicycle model with the cubic tire law of Samsundar 1996, ch. 7.
 
 Same yaw-plane equations as :mod:`fourws_sim.models.linear2dof` (eqs. 7.1-7.2), with the

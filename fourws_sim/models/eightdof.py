@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Nonlinear 8-DOF spread-tire vehicle model (Samsundar 1996, ch. 8, eqs. 8.1-8.51; re-derived).
 
 Degrees of freedom: longitudinal U, lateral V, yaw r, sprung-mass roll :math:`\phi` (angle and

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Numba kernels of the 8-DOF model (right-hand side, RK4 and Euler loops) for one tire model.
 
 The equations are those of :mod:`fourws_sim.models.eightdof` (see its docstring), written as

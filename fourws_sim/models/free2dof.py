@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Linear 2-DOF bicycle model, free steering control (Samsundar 1996, ch. 3.4 and 4.4).
 
 The front road-wheel angle is a state: the steering system is the first-order (highly damped)

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Linear 2-DOF bicycle model with time-lagged tire side force (Samsundar 1996, ch. 5).
 
 Stretched-string tire (von Schlippe): the axle side force builds up over the relaxation

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Linear 2-DOF bicycle model, fixed steering control (Samsundar 1996, ch. 3.3 and 4.1).
 
 Lateral velocity V and yaw rate r of a rigid vehicle at constant forward speed U, one

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Linear 3-DOF yaw/sideslip/roll model with roll steer (Samsundar 1996, ch. 3.5 and 6.1).
 
 A sprung mass :math:`m_s` rolls by :math:`\phi` about a fixed roll axis, its CG a height

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Tire models: pure scalar functions that ``numba.njit`` can compile.
 
 Every tire module exposes

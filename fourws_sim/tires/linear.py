@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Linear tire: constant cornering and longitudinal stiffness, optionally friction-limited.
 
 .. math::

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """STI (Systems Technology Inc.) / Calspan composite-slip tire of Appendix C (Table C.1).
 
 The paper's Appendix C gives the model of Allen, Rosenthal, Chrstos et al. (the tire of the
