@@ -36,15 +36,10 @@ from fourws_run import interface
 from fourws_run.accounting import RunAccount, TopicAccount
 from fourws_run.bagfile import BagError, BagWriter, bag_typestore, read_bag, typestore
 from fourws_run.config import USER_LAW, RunConfig
-from fourws_run.interface import CLOCK as TOPIC_CLOCK
 from fourws_run.interface import DRIVER_INPUT as TOPIC_DRIVER
-from fourws_run.interface import IMU as TOPIC_IMU
-from fourws_run.interface import MANEUVER_STATUS as TOPIC_MANEUVER_STATUS
 from fourws_run.interface import NODE_CONFIG as TOPIC_NODE_CONFIG
-from fourws_run.interface import ODOM as TOPIC_ODOM
 from fourws_run.interface import REAR_STEER_CMD as TOPIC_REAR_CMD
 from fourws_run.interface import RUN_CONFIG as TOPIC_RUN_CONFIG
-from fourws_run.interface import SIM_STATUS as TOPIC_SIM_STATUS
 from fourws_run.interface import STATE as TOPIC_STATE
 from fourws_run.interface import TOPIC_TYPES
 from fourws_sim.errors import FourwsError, ParameterError

@@ -321,7 +321,6 @@ def plot_steady_state(runs: Sequence[RunAnalysis], path: Path) -> Path | None:
     return None if fig is None else _save(fig, path)
 
 
-
 def figure_eigenvalues(runs: Sequence[RunAnalysis]) -> Any | None:
     """Eigenvalues, one panel per law: the 8-DOF linearized vs speed (coloured by speed),
     the linear models at the run speed and the eigenvalues identified from each run. The

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """``fourws study STUDY [--out DIR] [--workers N] [--backend local|dask] [--scheduler ADDR]
 [--resume] [--force] [--json]``: sweeps and Monte Carlo over speed, laws and parameter error.
 
@@ -80,6 +82,7 @@ def _study(args: argparse.Namespace, target: str) -> int:
     check_size(study, args.force)
     out = args.out if args.out is not None else Path("studies") / study.name
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+
     def announce(missing: int) -> None:
         print(f"fourws study {study.name}: {missing} of {study.n_points} points to run in "
               f"blocks of {study.block_size}, {workers} {args.backend} worker(s)"

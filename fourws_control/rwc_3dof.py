@@ -193,7 +193,7 @@ class Rwc4Law(Law):
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)
-        S, I = roll3dof.STATE, roll3dof.INPUT
+        S, IN = roll3dof.STATE, roll3dof.INPUT
         rows = []
         b_rows = []
         for u in _FIT_SPEEDS_MPS:
@@ -209,10 +209,10 @@ class Rwc4Law(Law):
             raise IncompatibleError("rwc4_3dof: the 3dof model's V row is not of the form "
                                     "c0 + c1/U + c2 U; the law's closed form does not apply")
         b_v = b_rows[0]
-        if abs(b_v[I.DELTA_R]) == 0.0:
+        if abs(b_v[IN.DELTA_R]) == 0.0:
             raise IncompatibleError("rwc4_3dof: rear steer has no direct effect on dV/dt")
-        self._b_rear = float(b_v[I.DELTA_R])
-        self._ksf = -float(b_v[I.DELTA_F]) / self._b_rear
+        self._b_rear = float(b_v[IN.DELTA_R])
+        self._ksf = -float(b_v[IN.DELTA_F]) / self._b_rear
         c = self._coef
         self._gains = GainFunction(rwc4_gains, np.array(
             [self._ksf, self._b_rear, *c[:, S.R], *c[:, S.PHI], *c[:, S.PHI_DOT]]))

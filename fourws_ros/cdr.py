@@ -29,9 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from fourws_ros.conversions import (N_WHEELS, NS_PER_S, STATE_SCALARS, STATE_WHEELS,
+from fourws_ros.conversions import (NS_PER_S, STATE_SCALARS, STATE_WHEELS,
                                     _quaternion_from_euler, check_finite_mapping,
                                     outputs_finite, time_to_ns)
+from fourws_run.interface import N_WHEELS
 from fourws_sim.errors import NonFiniteError
 from fourws_sim.params import GRAVITY_MPS2
 

@@ -247,7 +247,7 @@ class ControllerNode(Node):
         """Answer no more states; wait until what this node published is delivered."""
         self._closing = True
         reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder,
-                                  reporting.delivery_timeout(self))
+                                 reporting.delivery_timeout(self))
 
     # ------------------------------------------------------------------ handshake
     def _on_state(self, raw: bytes) -> None:

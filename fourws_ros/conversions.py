@@ -20,9 +20,10 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, N_WHEELS, NS_PER_S, STATE_SCALARS,
-                                  STATE_WHEELS, time_to_ns)
+from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, NS_PER_S, STATE_SCALARS, STATE_WHEELS,
+                                  time_to_ns)
 from fourws_sim.errors import NonFiniteError
+
 
 # ---------------------------------------------------------------------------- parameters
 def vehicle_from_params(node: Any, name_param: str = "vehicle",

@@ -138,5 +138,5 @@ def graph_env(domain_id: int, base: dict[str, str] | None = None) -> dict[str, s
     return env
 
 
-__all__ = ["DDS_PROFILES", "DOMAIN_ID_RANGE", "DomainError", "DomainLease", "MAX_DOMAIN_ID", "domain_for_run",
-           "graph_env", "reserve_domain_id"]
+__all__ = ["DDS_PROFILES", "DOMAIN_ID_RANGE", "DomainError", "DomainLease", "MAX_DOMAIN_ID",
+           "domain_for_run", "graph_env", "reserve_domain_id"]

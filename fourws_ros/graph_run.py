@@ -441,7 +441,7 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: _LauncherNode, state: _R
                     + (f"; node {', '.join(stopped)} is stopped (SIGSTOP)" if stopped else "")
                     + (f"; the simulator waits for: {waiting}" if waiting else ""))
         if not config.lockstep and state.sim_time_s > (config.maneuver.duration_s
-                                                        + REALTIME_OVERRUN_S):
+                                                       + REALTIME_OVERRUN_S):
             return (f"the maneuver node did not end the run (t = {state.sim_time_s:.2f} s, "
                     f"maneuver duration {config.maneuver.duration_s} s)")
         if on_running is not None and not called and state.sim_time_s > 0.0:

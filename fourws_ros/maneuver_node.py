@@ -176,7 +176,7 @@ class ManeuverNode(Node):
         """Answer no more states; wait until what this node published is delivered."""
         self.done = True
         reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder,
-                                  reporting.delivery_timeout(self))
+                                 reporting.delivery_timeout(self))
 
 
 def main(args: list[str] | None = None) -> int:

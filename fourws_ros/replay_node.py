@@ -193,11 +193,10 @@ class ReplayNode(Node):
         if self._index >= len(self.messages):
             self.finished = True
 
-
     def on_shutdown(self, executor: Any) -> None:
         """Give reliable readers the time to take the last messages before the node goes."""
         reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder,
-                                  reporting.delivery_timeout(self))
+                                 reporting.delivery_timeout(self))
         self.get_logger().info(f"published {self.published} messages")
 
 

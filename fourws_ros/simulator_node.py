@@ -241,14 +241,16 @@ class SimulatorNode(Node):
         self._imu_encoder = cdr.ImuEncoder(topics.FRAME_BODY)
         self.create_service(Trigger, topics.SRV_RESET, self._on_reset)
         self.create_service(SetBool, topics.SRV_PAUSE, self._on_pause)
-        self._config_pub = reporting.publish_node_config(self, self.counts, topics.Role.SIMULATOR, {
+        config = {
             "vehicle": self.vehicle.to_dict(), "model": self.model_name,
             "tire": self.vehicle.tire.model if self.vehicle.tire is not None else "",
             "integrator": str(self._param("integrator")), "integration_step_s": self.dt_s,
             "control_period_s": self.control_period_s,
             "state_period_s": float(self._param("state_period_s")),
             "clock_mode": self.clock_mode,
-            "initial_speed_mps": float(self._cfg["initial_speed_mps"])})
+            "initial_speed_mps": float(self._cfg["initial_speed_mps"])}
+        self._config_pub = reporting.publish_node_config(self, self.counts,
+                                                         topics.Role.SIMULATOR, config)
 
     _LIVE = ("viz_period_s", "status_period_s", "command_timeout_s", "driver_timeout_s",
              "initial_speed_mps")
@@ -679,7 +681,7 @@ class SimulatorNode(Node):
             self._final_sent = True
             self._publish_status(self.engine.sim.time_s, final=True)
         reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder,
-                                  reporting.delivery_timeout(self))
+                                 reporting.delivery_timeout(self))
 
 
 def _make_thread_realtime(priority: int, logger: Any) -> None:

@@ -203,7 +203,8 @@ class RunConfig:
             "integration_step_s": self.integration_step_s,
             "control_period_s": self.control_period_s,
             "state_period_s": self.state_period_s, "clock_mode": self.clock_mode,
-            "controller_period_s": self.controller_period_s, "speed_mps": self.speed_mps, "scenario": self.scenario,
+            "controller_period_s": self.controller_period_s, "speed_mps": self.speed_mps,
+            "scenario": self.scenario,
             "recorded_topics": list(self.recorded_topics), "versions": dict(self.versions),
         }
 

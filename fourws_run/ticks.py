@@ -296,7 +296,7 @@ class LockstepAnswers:
         if self.awaited is None:
             return ""
         missing = [name for name, got in (("driver input", self.driver),
-                                           ("rear-steer command", self.rear_rad))
+                                          ("rear-steer command", self.rear_rad))
                    if got is None]
         return " and ".join(missing)
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The one reader of fourws configuration YAML (vehicles, maneuvers, scenarios, parameter files).
 
 PyYAML's ``safe_load`` reads YAML 1.1 and trusts its input; a configuration reader must not:
@@ -29,7 +31,6 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from yaml.constructor import ConstructorError
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from fourws_sim.errors import ParameterError

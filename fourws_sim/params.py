@@ -37,6 +37,7 @@ from typing import Any, ClassVar, Mapping
 from fourws_sim.config_yaml import read_yaml
 from fourws_sim.errors import ParameterError, UnknownNameError, describe
 
+
 def find_resource_dir(beside: Path, package: str, sub: str, marker: str) -> Path:
     """A folder shipped with fourws: ``beside`` in a checkout or an editable install, else
     ``share/<package>/<sub>`` of an installed package (``colcon build`` without
@@ -109,6 +110,7 @@ _CHECKS = {
 #: whose plausibility bounds are not applied (for exotic vehicles; sign checks still apply).
 UNCHECKED_KEY = "unchecked_fields"
 
+
 def _check_value(value: Any, f: dataclasses.Field[Any], name: str,
                  source: str | None) -> float:
     """``value`` as a float if it passes the range check of field ``f``, else ParameterError
@@ -150,7 +152,7 @@ def bounded_fields(cls: type, prefix: str = "") -> list[str]:
              if f.metadata.get("bounds") is not None]
     # optional fields that are not _spec fields declare theirs in OPTIONAL_BOUNDS
     return names + [f"{prefix}{key}" for key in (*getattr(cls, "SHORTHANDS", {}),
-                                                  *getattr(cls, "OPTIONAL_BOUNDS", {}))]
+                                                 *getattr(cls, "OPTIONAL_BOUNDS", {}))]
 
 
 def unchecked_fields_from(data: Mapping[str, Any], valid: list[str] | set[str],

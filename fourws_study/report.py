@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The study report: ``DIR/report/index.html`` with PNG figures, in the look of the analysis
 report (:mod:`fourws_analysis.report`).
 
@@ -115,7 +117,7 @@ def critical_speed_8dof_lin(vehicle: Any, law: Any, belief: Any, options: Any,
 
     def margin(u: float) -> float:
         eig = np.linalg.eigvals(compare.eightdof_linear_system(vehicle, u, law, belief,
-                                                              options).A)
+                                                               options).A)
         eig = eig[np.abs(eig) > ZERO_MODE_PER_S]
         return -float(np.max(eig.real))
 
@@ -320,7 +322,7 @@ def figure_distributions(table: pa.Table, laws: Sequence[str], metric: str) -> A
         v = values[mine & ok & np.isfinite(values)]
         left_out = int(np.count_nonzero(mine & ~ok))
         ax.set_title(f"{law}: {v.size} points" + (f", {left_out} not ok left out"
-                                                   if left_out else ""), fontsize=8)
+                                                  if left_out else ""), fontsize=8)
         if not v.size:
             continue
         ax.hist(v, bins=30, color=f"C{k % 10}")

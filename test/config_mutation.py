@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Mutations of the shipped configuration files and the classification of what fourws does
 with them: shared by ``test/test_config_mutation.py`` (hypothesis, bounded) and the
 before/after table of bad-input handling::
@@ -26,7 +28,6 @@ different value).
 from __future__ import annotations
 
 import contextlib
-import copy
 import io
 import math
 import os

@@ -12,7 +12,6 @@ zero with this ratio), clipped to the rear angle limit.
 """
 
 import json
-import math
 import sys
 
 import rclpy
@@ -36,7 +35,8 @@ def ratio(car: dict, speed: float) -> float:
     a, b, m = c["cg_to_front_axle_m"], c["cg_to_rear_axle_m"], c["mass_kg"]
     cf, cr = t["cornering_stiffness_front_n_per_rad"], t["cornering_stiffness_rear_n_per_rad"]
     wheelbase = a + b
-    return (b - a * m * speed ** 2 / (cr * wheelbase)) / (a + b * m * speed ** 2 / (cf * wheelbase))
+    mu2 = m * speed ** 2 / wheelbase
+    return (b - a * mu2 / cr) / (a + b * mu2 / cf)
 
 
 class ContractController(Node):

@@ -86,7 +86,6 @@ def test_steady_state_gain_of_linear_system_is_textbook_yaw_gain() -> None:
         pytest.approx(SPEED * expected, rel=1e-10)
 
 
-
 def test_dc_gain_of_a_singular_model_is_its_low_frequency_limit() -> None:
     """A model with a mode the input reaches but no output sees (x1' = x2, like the 8-DOF's
     heading) has a singular A: the DC gain is the limit of the response, here of
@@ -101,6 +100,7 @@ def test_dc_gain_of_a_singular_model_is_its_low_frequency_limit() -> None:
     assert fr.label == "integrator and lag" and fr.input == U.ROAD_WHEEL.channel
     with pytest.raises(B.MetricUnavailableError, match="no output 'roll_rad'.*yaw_rate_radps"):
         F.dc_gain(system, "roll_rad")
+
 
 def test_metrics_of_second_order_system() -> None:
     """Resonance, bandwidth and phase of wn^2/(s^2 + 2 zeta wn s + wn^2) match the analytic

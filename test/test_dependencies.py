@@ -148,8 +148,8 @@ def test_every_runtime_import_is_an_exec_dependency(imports) -> None:
 def test_every_test_import_is_declared(imports) -> None:
     _, tests = imports
     ros, xml = _ros_packages(), _package_xml()
-    keys = xml.get("test_depend", set()) | xml.get("exec_depend", set()) | xml.get("depend",
-                                                                                    set())
+    keys = set().union(*(xml.get(kind, set()) for kind in ("test_depend", "exec_depend",
+                                                           "depend")))
     missing = {m: sorted(files) for m, files in tests.items()
                if _key_and_pip(m, ros)[0] not in keys}
     assert not missing, f"test imports with no <test_depend> in package.xml: {missing}"

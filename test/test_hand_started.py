@@ -11,10 +11,8 @@ import os
 import signal
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
-import pytest
 
 from fourws_analysis.bag import load_bag
 from fourws_ros import topics

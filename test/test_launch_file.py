@@ -65,4 +65,3 @@ def test_launch_uses_the_shipped_parameter_files(launch) -> None:
         for call in calls:
             assert "ros__parameters" in params[call["name"]], (name, call["name"])
         assert params[NODE_NAMES[Role.SIMULATOR]]["ros__parameters"]["clock_mode"] == clock
-

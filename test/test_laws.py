@@ -107,7 +107,7 @@ def test_rwc1_reduces_to_ff_zero_sideslip_without_roll_steer(set1):
     """Model levels agree: with eps_f = eps_r = 0 roll does not change the steady slip
     equations, so RWC 1 = Sano's ratio and RWC 2 = eq. 4.14 with Ksf = 0."""
     flat = dataclasses.replace(set1, roll=dataclasses.replace(set1.roll, roll_steer_front=0.0,
-                                                               roll_steer_rear=0.0))
+                                                              roll_steer_rear=0.0))
     sano = make_law("ff_zero_sideslip", flat)
     kr_family = make_law("ff_zero_sideslip", flat, ksf=0.0)
     for u in SPEEDS_MPS:

@@ -113,7 +113,7 @@ def test_oversteer_fws_critical_speed_analytic(vehicles):
     a, b, L, m = c.cg_to_front_axle_m, c.cg_to_rear_axle_m, c.wheelbase_m, c.mass_kg
     analytic = math.sqrt(L * L * cf * cr / (m * (a * cf - b * cr)))
     assert critical_speed("2dof", v, "fws").critical_speed_mps == pytest.approx(analytic,
-                                                                                 rel=1e-7)
+                                                                                rel=1e-7)
     lyap = critical_speed("2dof", v, "fws", criterion="lyapunov").critical_speed_mps
     assert lyap == pytest.approx(analytic, rel=1e-6)
     assert characteristic_speeds(v) == (None, pytest.approx(analytic, rel=1e-12))
@@ -358,7 +358,7 @@ def test_3dof_roll_steer_critical_speed_a0(vehicles):
 
 
 @pytest.mark.parametrize("model, law, vehicle_key", [("2dof", "sol1", 1),
-                                                    ("3dof", "rwc2_3dof", 1)])
+                                                     ("3dof", "rwc2_3dof", 1)])
 def test_4ws_yaw_gain_flatter_than_fws(vehicles, model, law, vehicle_key):
     """Figures 4.6 and 6.13 (85 km/h, data set 1): the 4WS yaw-rate gain is flatter over the
     drivers' 0-2 Hz than FWS (ratio of max to min gain)."""

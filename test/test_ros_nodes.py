@@ -615,6 +615,7 @@ def test_realtime_command_timeout_falls_back_to_zero_and_recovers(rclpy_context)
         flagged = next(s for s in peer.status if s.command_timed_out)
         assert flagged.sim_time_s > timeout - 0.01 and flagged.stale_commands >= 1
         # a controller appears: its commands are used again, the flag clears
+
         def answering() -> bool:
             if peer.states:
                 peer.answer(peer.states[-1], 0.01)

@@ -151,10 +151,10 @@ def test_eightdof_closed_loop_is_the_law_gains_on_the_linearization(law: str) ->
     matrices are built here from the finite-difference Jacobians at straight running and
     the law's gain vector in Signal order, each gain put on the 8-DOF state of the same
     meaning (delta_r = k_delta delta_f + k_r R + k_phi PHI + k_p P + k_V V), the earth-frame
-    position left out (nothing depends on it: zero columns). eightdof_linear_system (A, B, the rear-command output)
-    and eightdof_sampled_loop (the zero-order-hold transition matrix) must equal them to the
-    last bit (the same floating-point operations), at a walking-pace-faded and two driving
-    speeds."""
+    position left out (nothing depends on it: zero columns). eightdof_linear_system (A, B, the
+    rear-command output) and eightdof_sampled_loop (the zero-order-hold transition matrix)
+    must equal them to the last bit (the same floating-point operations), at a
+    walking-pace-faded and two driving speeds."""
     import scipy.signal
 
     from fourws_analysis.linearize import jacobians

@@ -504,11 +504,12 @@ def initial_state(p: Params, speed_mps: float = 0.0) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 
 def _solve_body(m: float, ms_h_c: float, iz: float, ixz: float, ix: float,
-                fy: float, n: float, l: float) -> tuple[float, float, float]:
-    """Solve ``[[m, 0, -msh c], [0, Iz, -Ixz], [-msh c, -Ixz, Ix]] [V', r', p'] = rhs``."""
+                fy: float, n: float, roll_moment: float) -> tuple[float, float, float]:
+    """Solve ``[[m, 0, -msh c], [0, Iz, -Ixz], [-msh c, -Ixz, Ix]] [V', r', p'] = rhs``
+    (``rhs = [fy, n, roll_moment]``)."""
     # p' by eliminating V' and r' (Schur complement on the roll row)
     det = ix - ms_h_c * ms_h_c / m - ixz * ixz / iz
-    pd = (l + ms_h_c * fy / m + ixz * n / iz) / det
+    pd = (roll_moment + ms_h_c * fy / m + ixz * n / iz) / det
     vd = (fy + ms_h_c * pd) / m
     rd = (n + ixz * pd) / iz
     return vd, rd, pd

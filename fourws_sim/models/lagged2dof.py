@@ -112,7 +112,7 @@ def params_for(vehicle: Vehicle, speed_mps: float, *,
     cf, cr = fixed.cf_n_per_rad, fixed.cr_n_per_rad
     lag_f = u / sigma_f  # 1/s, inverse time constants of the force build-up
     lag_r = u / sigma_r
-    S, I = STATE, INPUT
+    S, IN = STATE, INPUT
     A = np.zeros((4, 4))
     A[S.V, S.R] = -u
     A[S.V, S.FY_F] = A[S.V, S.FY_R] = 1.0 / m
@@ -121,8 +121,8 @@ def params_for(vehicle: Vehicle, speed_mps: float, *,
     A[S.FY_F] = [-lag_f * cf / u, -lag_f * cf * a / u, -lag_f, 0.0]
     A[S.FY_R] = [-lag_r * cr / u, lag_r * cr * b / u, 0.0, -lag_r]
     B = np.zeros((4, 2))
-    B[S.FY_F, I.DELTA_F] = lag_f * cf
-    B[S.FY_R, I.DELTA_R] = lag_r * cr
+    B[S.FY_F, IN.DELTA_F] = lag_f * cf
+    B[S.FY_R, IN.DELTA_R] = lag_r * cr
     return Params(fixed, sigma_f, sigma_r, A, B)
 
 
@@ -136,4 +136,3 @@ def matrices(vehicle: Vehicle, speed_mps: float, *,
 def derivatives(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
     """State derivative ``[dV/dt, dr/dt, dFyf/dt, dFyr/dt] = A x + B u`` (SI)."""
     return p.A @ np.asarray(x, dtype=float) + p.B @ np.asarray(u, dtype=float)
-
