@@ -47,7 +47,7 @@ SRV_PAUSE = f"{NAMESPACE}/pause"
 #: ROS package of the fourws message definitions (``msg/*.msg``): the ``fourws`` package itself
 #: generates them (one ament_cmake package, see docs/architecture.md).
 MSG_PACKAGE = "fourws"
-#: Earlier name of the message package (a separate ``fourws_msgs`` package before 0.2); bags
+#: Earlier name of the message package (a separate ``fourws_msgs`` interface package); bags
 #: recorded with it still decode (the bag tools register the definitions under both names).
 LEGACY_MSG_PACKAGES: tuple[str, ...] = ("fourws_msgs",)
 

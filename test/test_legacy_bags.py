@@ -1,7 +1,7 @@
 # SPDX-FileCopyrightText: 2026 fourws developers
 # SPDX-License-Identifier: Apache-2.0
 """Bags recorded before the messages moved into the fourws package (type names
-``fourws_msgs/msg/...``, fourws 0.1 with a separate interface package) still load.
+``fourws_msgs/msg/...``, from the separate interface package of earlier revisions) still load.
 
 Source: the values written into such a bag come back unchanged.
 """
