@@ -28,7 +28,8 @@ RUNTIME_DIRS = ("fourws_sim", "fourws_control", "fourws_run", "fourws_analysis",
                 "fourws_cli", "launch")
 #: Import name -> (rosdep key, PyPI distribution) of the libraries that are not ROS packages.
 #: Evidence for each key (ros/rosdistro, rosdep/python.yaml): python3-numpy, python3-scipy,
-#: python3-yaml, python3-matplotlib, python3-pytest, python-control-pip: present in the file;
+#: python3-yaml, python3-matplotlib, python3-pytest, python3-hypothesis, python-control-pip:
+#: present in the file;
 #: python3-numba: rosdistro PR 32274, all Ubuntu releases since PR 36477;
 #: python3-rosbags-pip: PR 37795; mcap-ros2-support: PR 36081 (pip mcap-ros2-support, which
 #: requires the mcap library the code imports).
@@ -42,6 +43,7 @@ LIBRARIES: dict[str, tuple[str, str]] = {
     "rosbags": ("python3-rosbags-pip", "rosbags"),
     "mcap": ("mcap-ros2-support", "mcap"),
     "pytest": ("python3-pytest", "pytest"),
+    "hypothesis": ("python3-hypothesis", "hypothesis"),
 }
 #: ROS packages imported only by the launch file: ``ros2 launch`` brings them on a system ROS
 #: install; they are not on PyPI (the venv uses ``fourws run`` instead).
