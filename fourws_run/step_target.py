@@ -19,7 +19,7 @@ import numpy as np
 
 from fourws_run.closed_loop import ClosedLoopResult, run_closed_loop
 from fourws_sim.errors import ParameterError
-from fourws_sim.maneuvers import ManeuverSpec
+from fourws_sim.maneuvers import ManeuverSpec, StepSteerParams
 
 #: The amplitude search stops when the steady |a_y| is within this fraction of the target
 #: (ISO 7401 asks for the lateral acceleration within a tolerance of the nominal value; 0.5 %
@@ -164,7 +164,7 @@ def resolve_maneuver_for_law(scenario: Any, law: str) -> ManeuverSpec:
     """
     spec = scenario.maneuver
     p = spec.params
-    if spec.type != "step_steer" or p.target_lateral_accel_mps2 is None \
+    if not isinstance(p, StepSteerParams) or p.target_lateral_accel_mps2 is None \
             or p.amplitude_law == law:
         return spec
     where = spec.source or spec.name
