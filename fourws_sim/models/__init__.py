@@ -24,6 +24,7 @@ MODELS: dict[str, str] = {
     "3dof": "fourws_sim.models.roll3dof",
     "2dof-cubic": "fourws_sim.models.cubic2dof",
     "8dof": "fourws_sim.models.eightdof",
+    "8dof-free": "fourws_sim.models.eightdof_free",
 }
 
 
