@@ -1,7 +1,10 @@
 """Regression pin of every shipped maneuver: the offline twin's driver commands and outputs.
 
 Source of the pinned numbers: the code of commit ae11d23 (before the maneuvers became one class
-per type). Each shipped maneuver file runs on the offline twin
+per type) for the ten maneuvers it shipped; the maneuvers added since are pinned with the code
+of the commit that added them (torque-input maneuvers on ``8dof-free``, the sine with dwell
+resolved for ``fws`` on the default scenario's settings). Each shipped maneuver file runs on
+the offline twin
 (:func:`fourws_run.closed_loop.run_closed_loop`) on table_8_1 with ``fws``, its duration cut
 to :data:`PIN_DURATION_S` (the run costs a fraction of a second and still covers the settle,
 the steer and, for ``constant_radius``, one speed step). The SHA-256 of the recorded driver
@@ -22,11 +25,15 @@ import numpy as np
 import pytest
 
 from fourws_run.closed_loop import run_closed_loop
-from fourws_sim.maneuvers import available_maneuvers, load_maneuver_spec
+from fourws_run.step_target import resolve_maneuver_for_law
+from fourws_run.scenario import load_scenario
+from fourws_sim.maneuvers import available_maneuvers, load_maneuver_spec, maneuver_class
 from fourws_sim.params import load_vehicle
 
 #: Longest simulated time of a pinned run, s.
 PIN_DURATION_S = 10.0
+#: Longer for the maneuvers whose event comes later (the release at 10 s).
+PIN_DURATIONS = {"steering_release": 12.0}
 
 #: maneuver file -> (driver digest, outputs digest, end reason, phases joined by ",").
 PINS: dict[str, tuple[str, str, str, str]] = {
@@ -90,6 +97,36 @@ PINS: dict[str, tuple[str, str, str, str]] = {
         'duration',
         'settle,sweep',
     ),
+    'sine_with_dwell': (
+        '9ab9d521fbc4b2135f5ae981a067e8ec18b186c460eb7ae925d57b3e36b4aa49',
+        '0837cd400bfbc3b205d086faa44dce57c8aabc14d86d0daeba4af5a1c6d09764',
+        'duration',
+        'settle,sine,dwell,return,coast',
+    ),
+    'slowly_increasing_steer': (
+        '43bc906c965a4f8cd201e031fb3b99b89f57b3d002fc222913812dd627ec3256',
+        '19aebd20a919e6c9208b39b13af7195aed6c45267419ffbc7b73e6fcd2f014f0',
+        'lateral acceleration limit reached',
+        'settle,steer',
+    ),
+    'steering_pulse': (
+        '98543433cca02fe7511856bb6ee60b371cebd3ef523984f5365baca61911a842',
+        '3f36091005f220e7433065021d0796700463917b8b8b56be3bcd558788af6d82',
+        'duration',
+        'settle,pulse,free',
+    ),
+    'steering_release': (
+        'e9688f531defe37e82006bb11a9f26adfd73265bfea6c4ce21139c647492f9e1',
+        'b49c4e390fb579dc7df9d69fb01c356a88b19e3d850e2afc8af9a5c3ab828a00',
+        'duration',
+        'settle,turn_in,hold,released',
+    ),
+    'steering_torque_step': (
+        'd2e82e394557e44a7d7d2b8b0fb7ab5b004382b56ce08dc6e7a6821c9a715cde',
+        'a4134890b74a19f53d19e542b1783da82eeb2ea651b9108fae6f067fe4596b5f',
+        'duration',
+        'settle,steer,hold',
+    ),
 }
 
 
@@ -104,8 +141,13 @@ def _array_digest(arrays: dict[str, np.ndarray]) -> str:
 def digests(name: str) -> tuple[str, str, str, str]:
     """The pinned quantities of maneuver file ``name`` (see the module docstring)."""
     spec = load_maneuver_spec(name)
-    spec = dataclasses.replace(spec, duration_s=min(spec.duration_s, PIN_DURATION_S))
-    res = run_closed_loop(load_vehicle("table_8_1"), spec, "fws")
+    spec = dataclasses.replace(spec, duration_s=min(spec.duration_s,
+                                                    PIN_DURATIONS.get(name, PIN_DURATION_S)))
+    torque = maneuver_class(spec.type).steering_control == "torque"
+    model = "8dof-free" if torque else "8dof"
+    spec = resolve_maneuver_for_law(
+        dataclasses.replace(load_scenario("default"), maneuver=spec, model=model), "fws")
+    res = run_closed_loop(load_vehicle("table_8_1"), spec, "fws", model=model)
     phases = []
     for phase in res.phase:  # run-length encoded: the phase sequence, not every tick
         if not phases or phases[-1] != phase:

@@ -55,9 +55,15 @@ from fourws_sim.maneuvers.base import (MAX_DURATION_S, MAX_HAND_WHEEL_ANGLE_RAD,
                                        RANDOM_PEAK_PER_RMS, STEER_INPUTS, STEERING_CONTROLS,
                                        Maneuver, ManeuverSpec)
 from fourws_sim.maneuvers.braking import BrakeInTurn, BrakeInTurnParams
-from fourws_sim.maneuvers.files import (MANEUVER_DIR, available_maneuvers, check_sampling,
-                                        load_maneuver_spec, make_maneuver, maneuver_class,
-                                        maneuver_spec_from_mapping, resolve_maneuver_path)
+from fourws_sim.maneuvers.esc import (SineWithDwell, SineWithDwellParams, SlowlyIncreasingSteer,
+                                      SlowlyIncreasingSteerParams)
+from fourws_sim.maneuvers.files import (MANEUVER_DIR, available_maneuvers, check_model,
+                                        check_sampling, load_maneuver_spec, make_maneuver,
+                                        maneuver_class, maneuver_spec_from_mapping,
+                                        resolve_maneuver_path)
+from fourws_sim.maneuvers.free_steer import (SteeringPulse, SteeringPulseParams,
+                                             SteeringRelease, SteeringReleaseParams,
+                                             SteeringTorqueStep, SteeringTorqueStepParams)
 from fourws_sim.maneuvers.open_loop import (Pulse, PulseParams, RampSteer, RampSteerParams,
                                             RandomSteer, RandomSteerParams, Sine, SineParams,
                                             SlowRampSteer, SlowRampSteerParams, StepSteer,
@@ -73,8 +79,11 @@ __all__ = [
     "MAX_PATH_POINTS", "MAX_RANDOM_SAMPLES", "MAX_ROAD_WHEEL_ANGLE_RAD",
     "MAX_STEER_FREQUENCY_HZ", "Maneuver", "ManeuverSpec", "Pulse", "PulseParams",
     "RANDOM_PEAK_PER_RMS", "RampSteer", "RampSteerParams", "RandomSteer", "RandomSteerParams",
-    "STEERING_CONTROLS", "STEER_INPUTS", "Sine", "SineParams", "SlowRampSteer",
-    "SlowRampSteerParams", "StepSteer", "StepSteerParams", "SweptSine", "SweptSineParams",
-    "available_maneuvers", "check_sampling", "load_maneuver_spec", "make_maneuver",
-    "maneuver_class", "maneuver_spec_from_mapping", "resolve_maneuver_path",
+    "STEERING_CONTROLS", "STEER_INPUTS", "Sine", "SineParams", "SineWithDwell",
+    "SineWithDwellParams", "SlowRampSteer", "SlowRampSteerParams", "SlowlyIncreasingSteer",
+    "SlowlyIncreasingSteerParams", "SteeringPulse", "SteeringPulseParams", "SteeringRelease",
+    "SteeringReleaseParams", "SteeringTorqueStep", "SteeringTorqueStepParams", "StepSteer",
+    "StepSteerParams", "SweptSine", "SweptSineParams", "available_maneuvers", "check_model",
+    "check_sampling", "load_maneuver_spec", "make_maneuver", "maneuver_class",
+    "maneuver_spec_from_mapping", "resolve_maneuver_path",
 ]

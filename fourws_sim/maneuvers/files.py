@@ -16,6 +16,7 @@ from fourws_sim.maneuvers.base import (MAX_DURATION_S, MAX_HAND_WHEEL_ANGLE_RAD,
                                        MAX_ROAD_WHEEL_ANGLE_RAD, STEER_INPUTS, Maneuver,
                                        ManeuverSpec, peak_input)
 from fourws_sim.maneuvers.registry import DRIVER_KEYS, MANEUVER_CLASSES
+from fourws_sim.models import FREE_STEERING_MODELS
 from fourws_sim.params import (CONFIG_DIR, MAX_SPEED_MPS, UNCHECKED_KEY, Vehicle, _from_mapping,
                                available_configs, bounded_fields, check_plausible, read_yaml,
                                resolve_config_path, unchecked_fields_from)
@@ -180,6 +181,30 @@ def load_maneuver_spec(name_path_or_mapping: str | FilePath | Mapping[str, Any]
     return maneuver_spec_from_mapping(read_yaml(path), str(path), default_name=path.stem)
 
 
+def check_model(spec: ManeuverSpec, model: str, source: str | None = None) -> None:
+    """Check that maneuver ``spec`` can steer model ``model``: a torque-input type needs a
+    model with a steering system (:data:`fourws_sim.models.FREE_STEERING_MODELS`), an angle
+    type one without (that model would ignore the angle and drive straight on).
+
+    Raises
+    ------
+    ParameterError
+        (field ``model``) otherwise, naming the models that fit.
+    """
+    control = maneuver_class(spec.type).steering_control
+    free = model in FREE_STEERING_MODELS
+    if control == "torque" and not free:
+        raise ParameterError("model", f"maneuver {spec.name!r} ({spec.type}) steers with a "
+                             f"torque: it needs a model with a steering system "
+                             f"({', '.join(FREE_STEERING_MODELS)}), got {model!r}",
+                             source or spec.source or spec.name)
+    if control == "angle" and free:
+        raise ParameterError("model", f"model {model!r} is steered by the driver's torque "
+                             f"(free control); maneuver {spec.name!r} ({spec.type}) steers by "
+                             f"angle: use a torque-input maneuver or a fixed-control model",
+                             source or spec.source or spec.name)
+
+
 def make_maneuver(spec_or_name: ManeuverSpec | str | FilePath | Mapping[str, Any],
                   vehicle: Vehicle) -> Maneuver:
     """Build a runnable :class:`Maneuver` of the spec's type for ``vehicle`` from a spec,
@@ -190,6 +215,6 @@ def make_maneuver(spec_or_name: ManeuverSpec | str | FilePath | Mapping[str, Any
 
 
 __all__ = ["COMMON_BOUNDS", "COMMON_FIELDS", "MANEUVER_DIR", "available_maneuvers",
-           "check_sampling", "load_maneuver_spec",
+           "check_model", "check_sampling", "load_maneuver_spec",
            "make_maneuver", "maneuver_class", "maneuver_spec_from_mapping",
            "resolve_maneuver_path"]

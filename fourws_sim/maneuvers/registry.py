@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from fourws_sim.maneuvers.base import Maneuver
 from fourws_sim.maneuvers.braking import BrakeInTurn
+from fourws_sim.maneuvers.esc import SineWithDwell, SlowlyIncreasingSteer
+from fourws_sim.maneuvers.free_steer import SteeringPulse, SteeringRelease, SteeringTorqueStep
 from fourws_sim.maneuvers.open_loop import (Pulse, RampSteer, RandomSteer, Sine, SlowRampSteer,
                                             StepSteer, SweptSine)
 from fourws_sim.maneuvers.path_following import ConstantRadius, DoubleLaneChange
@@ -24,6 +26,11 @@ MANEUVER_CLASSES: dict[str, type[Maneuver]] = {
     "constant_radius": ConstantRadius,
     "double_lane_change": DoubleLaneChange,
     "brake_in_turn": BrakeInTurn,
+    "steering_torque_step": SteeringTorqueStep,
+    "steering_release": SteeringRelease,
+    "steering_pulse": SteeringPulse,
+    "slowly_increasing_steer": SlowlyIncreasingSteer,
+    "sine_with_dwell": SineWithDwell,
 }
 
 #: Maneuver type name -> parameter class (the type fields of a file).

@@ -15,6 +15,10 @@ from fourws_sim.models.eightdof import (INPUT, PARAM, STATE, Params, derivatives
 from fourws_sim.models.eightdof import params_for as _fixed_params_for
 from fourws_sim.params import Vehicle
 
+#: The front road-wheel angle a law sees is the steering system's angle, this state
+#: (:func:`fourws_control.signals.signal_map`).
+FRONT_ANGLE_STATE = "DELTA_S"
+
 
 def params_for(vehicle: Vehicle, tire: str | None = None, *,
                v_min_mps: float | None = None) -> Params:
@@ -30,5 +34,5 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
     return _fixed_params_for(vehicle, tire, v_min_mps=v_min_mps, free_steering=True)
 
 
-__all__ = ["INPUT", "PARAM", "STATE", "Params", "derivatives", "evaluate", "initial_state",
-           "params_for"]
+__all__ = ["FRONT_ANGLE_STATE", "INPUT", "PARAM", "STATE", "Params", "derivatives", "evaluate",
+           "initial_state", "params_for"]
