@@ -56,6 +56,10 @@ DISPLACEMENT_FROM_FACTOR = 5.0
 DISPLACEMENT_LIMIT_M = 1.83
 DISPLACEMENT_LIMIT_HEAVY_M = 1.52
 HEAVY_MASS_KG = 3500.0
+#: A local yaw-rate peak after the reversal counts as the second peak from this fraction of
+#: the largest yaw rate of that sign on (a choice: the regulation's "first local peak" read
+#: so that a ripple of the filter near zero is not taken for it).
+SECOND_PEAK_FLOOR = 0.1
 #: Samples of the settle window zeroing needs before BOS, when the start time is unknown, s.
 DEFAULT_ZERO_WINDOW_S = 0.5
 
@@ -117,16 +121,19 @@ def timing_points(t: np.ndarray, steering_wheel_rad: np.ndarray) -> tuple[float,
 def second_peak_yaw_rate(t: np.ndarray, yaw_rate: np.ndarray, reversal_s: float,
                          direction: float) -> tuple[float, float]:
     """The first local yaw-rate peak of the second half wave's sign after the steering
-    reversal (S7.11.8): ``(value rad/s, signed; time s)``. A yaw rate that keeps growing to the
-    end of the record (the car spins on) peaks at its largest value."""
+    reversal (S7.11.8): ``(value rad/s, signed; time s)``. Only a peak above
+    :data:`SECOND_PEAK_FLOOR` of the largest such yaw rate counts (the ripple of a filter or of
+    noise near zero is no peak). A yaw rate that keeps growing to the end of the record (the
+    car spins on) peaks at its largest value."""
     t = np.asarray(t, dtype=float)
     y = -direction * np.asarray(yaw_rate, dtype=float)  # the second half wave's sign: +
     k0 = int(np.searchsorted(t, reversal_s))
     seg = y[k0:]
     if seg.size == 0:
         raise MetricUnavailableError("sine with dwell: no record after the steering reversal")
+    floor = SECOND_PEAK_FLOOR * float(np.max(seg))
     for i in range(1, seg.size - 1):
-        if seg[i] > 0.0 and seg[i] >= seg[i - 1] and seg[i] > seg[i + 1]:
+        if seg[i] > floor and seg[i] >= seg[i - 1] and seg[i] > seg[i + 1]:
             return float(-direction * seg[i]), float(t[k0 + i])
     i = int(np.argmax(seg))
     return float(-direction * seg[i]), float(t[k0 + i])

@@ -18,9 +18,9 @@ values):
 * residual yaw rate: the yaw rate :data:`RESIDUAL_TIME_S` (3 s) after the release, and over
   :math:`\dot\psi_0` (a car whose steering friction holds the wheel off centre keeps turning);
 * damping ratio and frequency of the yaw-rate oscillation about its final value, from its
-  successive extrema (half-cycle logarithmic decrement :math:`\Lambda`,
-  :math:`\zeta = 2\Lambda / \sqrt{4\pi^2 + 4\Lambda^2}`, damped frequency from the extrema
-  spacing), when it swings at least twice.
+  successive extrema from :data:`OSCILLATION_DELAY_S` after the release on (half-cycle
+  logarithmic decrement :math:`\Lambda`, :math:`\zeta = \Lambda / \sqrt{\pi^2 + \Lambda^2}`,
+  damped frequency from the extrema spacing), when it swings at least twice.
 
 Steering pulse: after the pulse ends the car and its steering swing freely: peak yaw rate and
 steering-wheel angle, the damping ratio and frequency of both oscillations, the time to settle
@@ -47,6 +47,11 @@ SETTLE_BAND = 0.05
 RESIDUAL_TIME_S = 3.0
 #: Extrema smaller than this fraction of the first swing are not counted as oscillation.
 EXTREMUM_FLOOR = 0.02
+#: The oscillation (damping ratio, frequency) is read from this long after the release or the
+#: end of the pulse, s: the steering system's fast modes (real parts of -5 1/s and faster in
+#: table_8_1's linearized 8dof-free) have decayed to e^-2.5 by then and leave the slowest,
+#: least damped mode, which is the one the driver feels.
+OSCILLATION_DELAY_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -73,16 +78,28 @@ class Oscillation:
                 "extrema": self.extrema}
 
 
+def _vertex(t: np.ndarray, d: np.ndarray, i: int) -> tuple[float, float]:
+    """The extremum at sample ``i`` refined by the parabola through its neighbours (time and
+    value between samples: the spacing of the extrema is not quantized by the sample
+    period)."""
+    a, b, c = d[i - 1], d[i], d[i + 1]
+    curv = a - 2.0 * b + c
+    if curv == 0.0:
+        return float(t[i]), float(b)
+    offset = 0.5 * (a - c) / curv
+    return float(t[i] + offset * (t[i + 1] - t[i])), float(b - 0.25 * (a - c) * offset)
+
+
 def oscillation(t: np.ndarray, y: np.ndarray, final: float) -> Oscillation:
     """Damping ratio and damped frequency of ``y`` about ``final`` from its successive
-    extrema (module docstring); extrema below :data:`EXTREMUM_FLOOR` of the first are left
+    extrema (module docstring; each refined by a parabola through its samples); extrema below :data:`EXTREMUM_FLOOR` of the first are left
     out (the tail in which numerical noise or friction steps dominate)."""
     d = np.asarray(y, dtype=float) - final
     t = np.asarray(t, dtype=float)
     idx = [i for i in range(1, d.size - 1)
            if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0.0 or (d[i] != d[i - 1]
                                                                and d[i + 1] == d[i] == 0.0)]
-    peaks = [(t[i], d[i]) for i in idx if d[i] != 0.0]
+    peaks = [_vertex(t, d, i) for i in idx if d[i] != 0.0]
     if peaks:
         first = abs(peaks[0][1])
         peaks = [p for p in peaks if abs(p[1]) >= EXTREMUM_FLOOR * first]
@@ -98,7 +115,7 @@ def oscillation(t: np.ndarray, y: np.ndarray, final: float) -> Oscillation:
         return Oscillation(None, None, len(swings))
     logs = [math.log(abs(a[1]) / abs(b[1])) for a, b in zip(swings, swings[1:])]
     lam = float(np.mean(logs))
-    zeta = 2.0 * lam / math.sqrt(4.0 * math.pi ** 2 + 4.0 * lam * lam)
+    zeta = lam / math.sqrt(math.pi ** 2 + lam * lam)
     half = float(np.mean(np.diff([s[0] for s in swings])))
     return Oscillation(zeta, 1.0 / (2.0 * half), len(swings))
 
@@ -181,6 +198,7 @@ def release_metrics(t: np.ndarray, yaw_rate_radps: np.ndarray, steering_wheel_ra
             f"{RESIDUAL_TIME_S:g} s after it")
     before = (t >= release_s - INITIAL_WINDOW_S) & (t < release_s)
     after = t >= release_s
+    free = t >= release_s + OSCILLATION_DELAY_S
     r0, d0 = float(np.mean(r[before])), float(np.mean(d[before]))
     ay0 = None if lateral_accel_mps2 is None else float(np.mean(
         np.asarray(lateral_accel_mps2)[before]))
@@ -200,8 +218,8 @@ def release_metrics(t: np.ndarray, yaw_rate_radps: np.ndarray, steering_wheel_ra
         settling_time_s=_settling_time(t, r, final, SETTLE_BAND * abs(r0), release_s),
         residual_yaw_rate_radps=residual,
         residual_fraction=residual / r0 if r0 != 0.0 else math.nan,
-        final_yaw_rate_radps=final, yaw=oscillation(ta, ra, final),
-        steering=oscillation(ta, d[after], float(np.mean(d[t >= t[-1] - FINAL_WINDOW_S]))))
+        final_yaw_rate_radps=final, yaw=oscillation(t[free], r[free], final),
+        steering=oscillation(t[free], d[free], float(np.mean(d[t >= t[-1] - FINAL_WINDOW_S]))))
 
 
 @dataclass(frozen=True)
@@ -243,7 +261,7 @@ def pulse_metrics(t: np.ndarray, yaw_rate_radps: np.ndarray, steering_wheel_rad:
         raise MetricUnavailableError(f"steering pulse: the record ends {t[-1] - pulse_end_s:.2f}"
                                      f" s after the pulse; needs {RESIDUAL_TIME_S:g} s")
     during = t >= pulse_start_s
-    after = t >= pulse_end_s
+    free = t >= pulse_end_s + OSCILLATION_DELAY_S
     k = int(np.argmax(np.abs(r[during])))
     peak_r = float(r[during][k])
     peak_d = float(d[during][int(np.argmax(np.abs(d[during])))])
@@ -254,8 +272,8 @@ def pulse_metrics(t: np.ndarray, yaw_rate_radps: np.ndarray, steering_wheel_rad:
         peak_steering_wheel_rad=peak_d,
         settling_time_s=_settling_time(t, r, final, SETTLE_BAND * abs(peak_r), pulse_end_s),
         residual_yaw_rate_radps=float(np.interp(pulse_end_s + RESIDUAL_TIME_S, t, r)),
-        yaw=oscillation(t[after], r[after], final),
-        steering=oscillation(t[after], d[after], final_d))
+        yaw=oscillation(t[free], r[free], final),
+        steering=oscillation(t[free], d[free], final_d))
 
 
 __all__ = ["Oscillation", "PulseResult", "ReleaseResult", "oscillation", "pulse_metrics",

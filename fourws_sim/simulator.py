@@ -57,7 +57,9 @@ class Inputs:
     rear_wheel_angle_rad : float
         Commanded rear road-wheel angle, rad.
     steering_torque_nm : float
-        Driver torque for free-control models, N m.
+        Driver torque on the steering wheel for the free-control models, N m (``8dof-free``
+        takes it through the steering ratio in its steering system; for ``2dof-free``, whose
+        input is the torque about the kingpin, it is multiplied by the ratio here).
     drive_torque_nm : sequence of 4 float
         Drive torque per wheel, N m (positive forward).
     brake_torque_nm : sequence of 4 float
@@ -159,6 +161,8 @@ class Simulator:
                 raise ParameterError("tire", f"only the {EIGHT_DOF} models have a tire choice")
             self._input_names = [m.name for m in self.model.INPUT]
         self._speed = 0.0
+        self._kingpin_per_wheel = (self.vehicle.steering.ratio
+                                   if self.vehicle.steering is not None else 1.0)
         self.reset(speed_mps=speed_mps)
 
     # ------------------------------------------------------------------ state
@@ -271,8 +275,10 @@ class Simulator:
                 arr[member] = u.front_wheel_angle_rad
             elif name == "DELTA_R":
                 arr[member] = u.rear_wheel_angle_rad
-            elif name in ("T_F", "STEER_TORQUE"):
+            elif name == "STEER_TORQUE":
                 arr[member] = u.steering_torque_nm
+            elif name == "T_F":  # the 2-DOF free model's kingpin torque: through the ratio
+                arr[member] = u.steering_torque_nm * self._kingpin_per_wheel
             elif name.startswith("DRIVE_"):
                 arr[member] = drive[("FL", "FR", "RL", "RR").index(name[-2:])]
             elif name.startswith("BRAKE_"):
