@@ -92,8 +92,9 @@ def _vertex(t: np.ndarray, d: np.ndarray, i: int) -> tuple[float, float]:
 
 def oscillation(t: np.ndarray, y: np.ndarray, final: float) -> Oscillation:
     """Damping ratio and damped frequency of ``y`` about ``final`` from its successive
-    extrema (module docstring; each refined by a parabola through its samples); extrema below :data:`EXTREMUM_FLOOR` of the first are left
-    out (the tail in which numerical noise or friction steps dominate)."""
+    extrema (module docstring; each refined by a parabola through its samples); extrema below
+    :data:`EXTREMUM_FLOOR` of the first are left out (the tail in which numerical noise or
+    friction steps dominate)."""
     d = np.asarray(y, dtype=float) - final
     t = np.asarray(t, dtype=float)
     idx = [i for i in range(1, d.size - 1)

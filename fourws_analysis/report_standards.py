@@ -26,6 +26,7 @@ RELEASE = STANDARD_KEYS["steering_release"]
 PULSE = STANDARD_KEYS["steering_pulse"]
 
 Row = tuple[str, str, Callable[[RunAnalysis], Any]]
+Table = tuple[str, list[Row], list[RunAnalysis]]
 
 
 def _yes_no(value: bool | None) -> str | None:
@@ -46,10 +47,10 @@ def law_verdicts(runs: Sequence[RunAnalysis]) -> list[fmvss126.LawVerdict]:
     return fmvss126.law_verdicts([(r.law, r.name, _swd(r)) for r in sine_with_dwell_runs(runs)])
 
 
-def standards_tables(runs: Sequence[RunAnalysis]) -> list[tuple[str, list[Row], list[RunAnalysis]]]:
+def standards_tables(runs: Sequence[RunAnalysis]) -> list[Table]:
     """The tables of the standard tests as (title, row specs, the runs they cover); rows are
     ``(label, unit, getter)`` like the report's other tables."""
-    tables: list[tuple[str, list[Row], list[RunAnalysis]]] = []
+    tables: list[Table] = []
     swd = sine_with_dwell_runs(runs)
     if swd:
         tables.append(("FMVSS No. 126 sine with dwell (per run)", [
@@ -97,7 +98,8 @@ def standards_tables(runs: Sequence[RunAnalysis]) -> list[tuple[str, list[Row], 
             ("steering-wheel angle overshoot", "–", g("steering_wheel_overshoot")),
             ("first yaw-rate zero after the release", "s", g("yaw_rate_zero_time_s")),
             ("time to settle (5 %)", "s", g("settling_time_s")),
-            ("residual yaw rate 3 s after the release", "deg/s", g("residual_yaw_rate_radps", deg)),
+            ("residual yaw rate 3 s after the release", "deg/s",
+             g("residual_yaw_rate_radps", deg)),
             ("residual / initial yaw rate", "–", g("residual_fraction")),
             ("yaw oscillation damping ratio", "–",
              lambda r: r.standards[RELEASE].yaw.damping_ratio),
@@ -110,11 +112,13 @@ def standards_tables(runs: Sequence[RunAnalysis]) -> list[tuple[str, list[Row], 
              lambda r: math.degrees(r.standards[PULSE].peak_yaw_rate_radps)),
             ("peak steering-wheel angle", "deg",
              lambda r: math.degrees(r.standards[PULSE].peak_steering_wheel_rad)),
-            ("yaw oscillation damping ratio", "–", lambda r: r.standards[PULSE].yaw.damping_ratio),
+            ("yaw oscillation damping ratio", "–",
+             lambda r: r.standards[PULSE].yaw.damping_ratio),
             ("yaw oscillation frequency", "Hz", lambda r: r.standards[PULSE].yaw.frequency_hz),
             ("steering oscillation damping ratio", "–",
              lambda r: r.standards[PULSE].steering.damping_ratio),
-            ("time to settle (5 % of the peak)", "s", lambda r: r.standards[PULSE].settling_time_s),
+            ("time to settle (5 % of the peak)", "s",
+             lambda r: r.standards[PULSE].settling_time_s),
             ("residual yaw rate 3 s after the pulse", "deg/s",
              lambda r: math.degrees(r.standards[PULSE].residual_yaw_rate_radps)),
         ], pulse))

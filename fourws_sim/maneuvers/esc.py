@@ -41,7 +41,6 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
 import numpy as np
-import scipy.signal
 
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import ParameterError
@@ -85,6 +84,10 @@ def phaseless_lowpass(x: np.ndarray, dt_s: float, cutoff_hz: float) -> np.ndarra
     (second-order sections) run forward and backward (scipy ``sosfiltfilt``), so the
     magnitude falls as a 12th-order filter's and the phase is zero. Records too short for the
     filter's padding are returned unfiltered (a simulated record has no sensor noise)."""
+    # imported here: scipy.signal takes about a second to import, and only the regulation's
+    # data processing needs it, not every process that plays a maneuver (the maneuver node)
+    import scipy.signal
+
     x = np.asarray(x, dtype=float)
     nyquist = 0.5 / dt_s
     if cutoff_hz >= nyquist:
