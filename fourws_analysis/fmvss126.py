@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""FMVSS No. 126 (UN R13-H annex 9, UN GTR 8) metrics of the sine with dwell and the slowly
 increasing steer, from recorded arrays, as the regulation defines them (S5.2, S7.11).
 
@@ -77,8 +79,8 @@ def _crossing(t: np.ndarray, y: np.ndarray, level: float, start: int = 0) -> tup
     return float(t[k - 1] + (level - y0) * (t[k] - t[k - 1]) / (y1 - y0)), k
 
 
-def timing_points(t: np.ndarray, steering_wheel_rad: np.ndarray) -> tuple[float, float, float,
-                                                                           float]:
+def timing_points(t: np.ndarray,
+                  steering_wheel_rad: np.ndarray) -> tuple[float, float, float, float]:
     """BOS and COS of a zeroed, filtered steering-wheel angle (module docstring).
 
     Returns

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Free steering control: the critical speed of the linearized 8-DOF with its steering system
 against the 2-DOF free-control model of the same car (Samsundar 1996, ch. 3.4/4.4).
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""ISO 17288 free-steer behaviour: metrics of the steering release (part 1) and the steering
 pulse (part 2), from recorded arrays.
 
@@ -98,8 +100,8 @@ def oscillation(t: np.ndarray, y: np.ndarray, final: float) -> Oscillation:
     d = np.asarray(y, dtype=float) - final
     t = np.asarray(t, dtype=float)
     idx = [i for i in range(1, d.size - 1)
-           if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0.0 or (d[i] != d[i - 1]
-                                                               and d[i + 1] == d[i] == 0.0)]
+           if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0.0
+           or (d[i] != d[i - 1] and d[i + 1] == d[i] == 0.0)]
     peaks = [_vertex(t, d, i) for i in idx if d[i] != 0.0]
     if peaks:
         first = abs(peaks[0][1])

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The report's part for the regulation and standard tests (FMVSS No. 126 sine with dwell and
 slowly increasing steer, ISO 17288 steering release and pulse): tables with pass/fail per run
 and per law, and the plots the regulation's graders look at -- the yaw rate over its second

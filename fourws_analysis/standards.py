@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The regulation and standard tests of a recorded run: which the maneuver asks for, computed
 from its arrays and its run configuration.
 

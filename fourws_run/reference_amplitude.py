@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """A of the FMVSS No. 126 sine with dwell for a law: the slowly increasing steer run with the law.
 
 The regulation's sine-with-dwell amplitudes are multiples of A, the steering-wheel angle of

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Series of runs: one scenario, several maneuvers per law.
 
 A scenario's ``series`` field says which maneuvers each law runs instead of the one

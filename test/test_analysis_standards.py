@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """`fourws analyze` of FMVSS No. 126 and ISO 17288 runs: metrics from the bag equal those of
 the arrays, pass/fail per run and per law in metrics.json and the report, the graders' plots.
 

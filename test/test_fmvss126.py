@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """FMVSS No. 126 (UN R13-H, UN GTR 8): the sine-with-dwell and slowly-increasing-steer
 maneuvers, A, the amplitude series, the regulation's metrics and a run series.
 
@@ -65,8 +67,8 @@ def test_sine_with_dwell_waveform_and_coasting() -> None:
                                atol=1e-15)
     assert sum(cmds[0].drive_torque_nm) > 0.0  # holding 80 km/h before the steer
     assert all(sum(c.drive_torque_nm) == 0.0 == sum(c.brake_torque_nm) for c in cmds[1:])
-    assert [man.phase(float(x)) for x in t] == ["settle", "sine", "dwell", "dwell", "coast",
-                                                 "coast"]
+    assert [man.phase(float(x)) for x in t] == ["settle", "sine", "dwell", "dwell",
+                                                "coast", "coast"]
 
 
 def test_unresolved_sine_with_dwell_cannot_run_and_steer_input_is_fixed() -> None:

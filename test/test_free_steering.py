@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The 8-DOF's free steering system (model ``8dof-free``), the torque-input maneuvers and the
 free-control analysis.
 
@@ -86,8 +88,8 @@ def test_coulomb_friction_holds_below_breakaway_and_slides_above_it() -> None:
 
 
 @pytest.mark.parametrize("friction", [0.0, 16.3])
-def test_compiled_kernel_matches_the_numpy_reference_with_free_steering(friction: float
-                                                                      ) -> None:
+def test_compiled_kernel_matches_the_numpy_reference_with_free_steering(
+        friction: float) -> None:
     """The numba right-hand side equals the NumPy ``evaluate`` to round-off with the free
     steering system on (random moving states, steering angles and rates, torques)."""
     v = _table_8_1(coulomb_friction_nm=friction)

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """`fourws run` of a scenario series through the real node graph, on the 8-DOF with its free
 steering system: one recorded run per member, each equal to its offline twin.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """ISO 17288 free-steer metrics on synthetic signals with closed forms (fourws_analysis.iso17288).
 
 Source of every number: the damped oscillation x = x0 e^(-sigma t) cos(omega t), whose

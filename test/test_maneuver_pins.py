@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Regression pin of every shipped maneuver: the offline twin's driver commands and outputs.
 
 Source of the pinned numbers: the code of commit ae11d23 (before the maneuvers became one class

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Maneuvers: steering inputs, closed-loop driving tasks and the speed-hold driver, from YAML.
 
 A maneuver file (``config/maneuvers/<name>.yaml``) is a mapping::

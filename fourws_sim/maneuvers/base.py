@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """What every maneuver type shares: the validated definition and the runtime base class.
 
 A maneuver type is a subclass of :class:`Maneuver` that names its parameter class

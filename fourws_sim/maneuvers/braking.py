@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Braking in a turn (Samsundar 1996, ch. 8, Figs. 8.23-8.27)."""
 
 from __future__ import annotations

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""The electronic-stability-control test maneuvers: slowly increasing steer and sine with dwell
 (FMVSS No. 126 S7.6 and S7.9; UN R13-H annex 9 and UN GTR 8 describe the same tests).
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Maneuver files: validation of a mapping into a :class:`~.base.ManeuverSpec`, loading by
 name or path, and :func:`make_maneuver` (the spec's class from the registry, bound to a
 vehicle)."""

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 r"""Torque-input maneuvers (free steering control): steering-torque step, ISO 17288-1 steering
 release, ISO 17288-2 steering pulse.
 

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Open-loop steering maneuvers: step, ramp, slowly increasing, sine, swept sine, random, pulse.
 
 Each runs a steering waveform of time (road-wheel or steering-wheel angle, ``steer_input``)

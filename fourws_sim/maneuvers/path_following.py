@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Closed-loop driving tasks: ISO 4138 constant radius and the ISO 3888-2 lane change.
 
 A driver model of :mod:`fourws_sim.drivers` steers (the preview path follower on a circle, the

@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The maneuver types by name: the file's ``type`` -> the :class:`~.base.Maneuver` subclass.
 
 Adding a maneuver type is one class (its parameters and what it does differently, in a module

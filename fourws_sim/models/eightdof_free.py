@@ -1,3 +1,5 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """The 8-DOF model with free steering control (model ``8dof-free``).
 
 The model of :mod:`fourws_sim.models.eightdof` with its steering system switched on: the front
