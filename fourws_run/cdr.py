@@ -35,6 +35,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from rosbags.interfaces import Nodetype
 
+from fourws_run.bagfile import typestore
 from fourws_run.interface import NS_PER_S
 from fourws_sim.errors import FourwsError
 
@@ -121,11 +122,7 @@ class _Stop(Exception):
 
 
 class _SequenceError(CodecError):
-    """A sequence field (no fixed layout) at ``offset``."""
-
-    def __init__(self, message: str, offset: int) -> None:
-        super().__init__(message)
-        self.offset = offset
+    """A sequence field: the message has no fixed layout from there on."""
 
 
 def _align(pos: int, size: int) -> int:
@@ -168,7 +165,7 @@ def _walk(store: Any, msgtype: str, pos: int, prefix: str,
                 pos = _primitive(full, sub_detail[0], int(count), pos, string_length, slots)
         else:
             raise _SequenceError(f"{msgtype} field {name!r} is a sequence: the message has no "
-                                 "fixed layout", pos)
+                                 "fixed layout")
     return pos
 
 
@@ -186,11 +183,7 @@ def _primitive(name: str, type_: str, count: int, pos: int,
 
 
 def _store(store: Any) -> Any:
-    if store is not None:
-        return store
-    from fourws_run.bagfile import typestore  # bagfile imports this module's users lazily
-
-    return typestore()
+    return typestore() if store is None else store
 
 
 @dataclass(frozen=True)
@@ -208,15 +201,12 @@ class Layout:
     strings : dict of str to bytes
         Text of each string field (without the NUL) if the layout was made from it
         (:func:`layout`); empty for a layout read from a message's lengths.
-    times : tuple of str
-        Paths of the ``builtin_interfaces/Time`` fields, in wire order.
     """
 
     msgtype: str
     slots: tuple[Slot, ...]
     size: int
     strings: Mapping[str, bytes] = field(default_factory=dict)
-    times: tuple[str, ...] = ()
 
     def slot(self, name: str) -> Slot:
         """The slot of field ``name``.
@@ -339,7 +329,7 @@ def layout(msgtype: str, strings: Mapping[str, str] | None = None,
     unknown = sorted(set(given) - {s.name for s in slots if s.type == "string"})
     if unknown:
         raise CodecError(f"{msgtype} has no string fields {unknown}")
-    return Layout(msgtype, tuple(slots), size, given, tuple(times))
+    return Layout(msgtype, tuple(slots), size, given)
 
 
 def _read_length(data: bytes | memoryview, offset: int, little: bool) -> int:
@@ -361,6 +351,20 @@ def _endian(data: bytes | memoryview) -> bool:
     return data[1] == 1
 
 
+@dataclass
+class _Block:
+    """Adjacent fixed arrays of one numeric type and length: one numpy view of the bytes."""
+
+    offset: int
+    dtype: np.dtype
+    count: int
+    names: list[str]
+
+    @property
+    def end(self) -> int:
+        return self.offset + self.dtype.itemsize * self.count * len(self.names)
+
+
 class _Plan:
     """Decoding of one layout: one ``struct`` format over the whole message."""
 
@@ -376,22 +380,20 @@ class _Plan:
         scalar_at: list[int] = []
         self.array_slices: list[tuple[str, int, int]] = []
         self.strings = [s.name for s in lay.slots if s.type == "string"]
-        self.blocks: list[tuple[int, np.dtype, int, int, tuple[str, ...]]] = []
+        self.blocks: list[_Block] = []
         n_values = 0
         for s in lay.slots:
             fmt += f"{s.offset - pos}x" if s.offset > pos else ""
             pos = s.end
             if s.count and numpy_arrays:
-                fmt += f"{s.size}x"
-                block = self.blocks[-1] if self.blocks else None
+                fmt += f"{s.size}x"  # read by numpy, not by struct
                 dtype = np.dtype(endian + PRIMITIVES[s.type])
-                if (block is not None and block[1] == dtype
-                        and block[3] == s.count
-                        and block[0] + block[1].itemsize * block[3] * block[2] == s.offset):
-                    self.blocks[-1] = (block[0], block[1], block[2] + 1, block[3],
-                                       block[4] + (s.name,))
+                last = self.blocks[-1] if self.blocks else None
+                if (last is not None and last.dtype == dtype and last.count == s.count
+                        and last.end == s.offset):
+                    last.names.append(s.name)
                 else:
-                    self.blocks.append((s.offset, dtype, 1, s.count, (s.name,)))
+                    self.blocks.append(_Block(s.offset, dtype, s.count, [s.name]))
                 continue
             fmt += s.code
             if s.count:
@@ -421,11 +423,11 @@ class _Plan:
                 out[name] = values[first:stop]
         for name in self.strings:
             out[name] = out[name].decode("utf-8", errors="replace")
-        for offset, dtype, rows, count, names in self.blocks:
-            block = np.frombuffer(data, dtype=dtype, count=rows * count,
-                                  offset=offset).reshape(rows, count)
-            for k, name in enumerate(names):
-                out[name] = block[k]
+        for block in self.blocks:
+            rows = np.frombuffer(data, dtype=block.dtype, count=block.count * len(block.names),
+                                 offset=block.offset).reshape(len(block.names), block.count)
+            for k, name in enumerate(block.names):
+                out[name] = rows[k]
         return out
 
 
@@ -505,7 +507,7 @@ class Decoder:
                          times)
         except _Stop as stop:
             return None, stop.offset
-        return Layout(self.msgtype, tuple(slots), size, {}, tuple(times)), None
+        return Layout(self.msgtype, tuple(slots), size), None
 
     def decode(self, data: bytes | memoryview) -> dict[str, Any]:
         """The fields of one serialized message (see the class description).
