@@ -229,9 +229,12 @@ def _packer(buf: bytearray, lay: Layout, names: Sequence[str]) -> Callable[..., 
         offset, fmt, _, _ = runs[0]
         return partial(fmt.pack_into, buf, offset)
 
+    writes = tuple((partial(fmt.pack_into, buf, offset), first, stop)
+                   for offset, fmt, first, stop in runs)
+
     def pack(*values: Any) -> None:
-        for offset, fmt, first, stop in runs:
-            fmt.pack_into(buf, offset, *values[first:stop])
+        for write, first, stop in writes:
+            write(*values[first:stop])
 
     return pack
 
