@@ -160,19 +160,12 @@ def driver_input_fields() -> tuple[str, ...]:
 
 
 # ============================================================================ decoders
-@lru_cache(maxsize=None)
-def _state_decoder() -> Decoder:
-    return Decoder(STATE_TYPE, numpy_arrays=True)
-
-
-@lru_cache(maxsize=None)
-def _driver_decoder() -> Decoder:
-    return Decoder(DRIVER_INPUT_TYPE)
-
-
-@lru_cache(maxsize=None)
-def _rear_decoder() -> Decoder:
-    return Decoder(REAR_STEER_COMMAND_TYPE)
+# Made at import, with the typestore: a node pays for deriving the layouts while it starts,
+# not inside its first answer of a run (loading the typestore takes a few hundred ms).
+_STATE_DECODER = Decoder(STATE_TYPE, numpy_arrays=True)
+_DRIVER_DECODER = Decoder(DRIVER_INPUT_TYPE)
+_REAR_DECODER = Decoder(REAR_STEER_COMMAND_TYPE)
+_DRIVER_FIELDS = driver_input_fields()
 
 
 def parse_state(data: bytes | memoryview) -> dict[str, Any]:
@@ -187,7 +180,7 @@ def parse_state(data: bytes | memoryview) -> dict[str, Any]:
     CodecError
         Not a ``VehicleState`` (too short for its layout, not plain CDR).
     """
-    out = _state_decoder().decode(data)
+    out = _STATE_DECODER.decode(data)
     out["stamp_ns"] = out.pop("header.stamp.sec") * NS_PER_S + out.pop("header.stamp.nanosec")
     del out["header.frame_id"]
     return out
@@ -201,9 +194,9 @@ def parse_driver_input(data: bytes | memoryview) -> tuple[int, DriverCommand]:
     CodecError
         Not a ``DriverInput``.
     """
-    out = _driver_decoder().decode(data)
+    out = _DRIVER_DECODER.decode(data)
     return (out["header.stamp.sec"] * NS_PER_S + out["header.stamp.nanosec"],
-            DriverCommand(**{name: out[name] for name in driver_input_fields()}))
+            DriverCommand(**{name: out[name] for name in _DRIVER_FIELDS}))
 
 
 def parse_rear_steer_command(data: bytes | memoryview) -> dict[str, Any]:
@@ -215,7 +208,7 @@ def parse_rear_steer_command(data: bytes | memoryview) -> dict[str, Any]:
     CodecError
         Not a ``RearSteerCommand``.
     """
-    out = _rear_decoder().decode(data)
+    out = _REAR_DECODER.decode(data)
     return {"angle_rad": out["angle_rad"], "rate_radps": out["rate_radps"], "law": out["law"],
             "state_stamp_ns": out["state_stamp.sec"] * NS_PER_S + out["state_stamp.nanosec"],
             "state_step": out["state_step"]}
@@ -415,14 +408,12 @@ class ClockEncoder:
         return self._head + self._pack(*divmod(time_to_ns(time_s), NS_PER_S)) + self._tail
 
 
-@lru_cache(maxsize=None)
-def _clock_encoder() -> ClockEncoder:
-    return ClockEncoder()
+_CLOCK_ENCODER = ClockEncoder()
 
 
 def encode_clock(time_s: float) -> bytes:
     """CDR bytes of a ``rosgraph_msgs/Clock`` at ``time_s`` (s, rounded to the ns)."""
-    return _clock_encoder().encode(time_s)
+    return _CLOCK_ENCODER.encode(time_s)
 
 
 class OdometryEncoder:
