@@ -405,7 +405,8 @@ class ClockEncoder:
 
     def encode(self, time_s: float) -> bytes:
         """CDR bytes of the clock at ``time_s`` (s, rounded to the ns)."""
-        return self._head + self._pack(*divmod(time_to_ns(time_s), NS_PER_S)) + self._tail
+        out = self._head + self._pack(*divmod(time_to_ns(time_s), NS_PER_S))
+        return out + self._tail if self._tail else out
 
 
 _CLOCK_ENCODER = ClockEncoder()
