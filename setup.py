@@ -10,7 +10,7 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(include=["fourws_sim*", "fourws_control*", "fourws_run*",
-                                    "fourws_analysis*",
+                                    "fourws_analysis*", "fourws_study*",
                                     "fourws_ros*", "fourws_cli*"]),
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
@@ -18,6 +18,7 @@ setup(
         (f"share/{PACKAGE}/config/vehicles", glob("config/vehicles/*.yaml")),
         (f"share/{PACKAGE}/config/maneuvers", glob("config/maneuvers/*.yaml")),
         (f"share/{PACKAGE}/config/scenarios", glob("config/scenarios/*.yaml")),
+        (f"share/{PACKAGE}/config/studies", glob("config/studies/*.yaml")),
         (f"share/{PACKAGE}/config/params", glob("config/params/*.yaml")),
         (f"share/{PACKAGE}/config/dds", glob("config/dds/*.xml")),
     ],

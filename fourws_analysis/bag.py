@@ -120,6 +120,13 @@ def stamp(time_s: float) -> dict[str, int]:
     return {"sec": ns // _NS_PER_S, "nanosec": ns % _NS_PER_S}
 
 
+def stamp_seconds(sec: np.ndarray, nanosec: np.ndarray) -> np.ndarray:
+    """Message times in s of ``builtin_interfaces/Time`` fields (:attr:`TopicArrays.time_s`
+    of a stamped topic)."""
+    return (np.asarray(sec).astype(np.float64)
+            + np.asarray(nanosec).astype(np.float64) * 1e-9)
+
+
 # --------------------------------------------------------------------------------------------
 # reader
 
@@ -330,11 +337,9 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
             raise BagError(f"bag {str(path)!r}: cannot decode {topic} ({msgtype}): {exc}") \
                 from None
         if "header.stamp.sec" in fields:
-            time_s = (fields["header.stamp.sec"].astype(np.float64)
-                      + fields["header.stamp.nanosec"].astype(np.float64) * 1e-9)
+            time_s = stamp_seconds(fields["header.stamp.sec"], fields["header.stamp.nanosec"])
         elif "clock.sec" in fields:
-            time_s = (fields["clock.sec"].astype(np.float64)
-                      + fields["clock.nanosec"].astype(np.float64) * 1e-9)
+            time_s = stamp_seconds(fields["clock.sec"], fields["clock.nanosec"])
         else:
             time_s = (np.asarray(recv_by_topic[topic], dtype=np.float64) - start) * 1e-9
         result.topics[topic] = TopicArrays(time_s=time_s, fields=fields)

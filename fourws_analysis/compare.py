@@ -11,6 +11,7 @@ maneuver                                    metrics
 ``random_steer``                            frequency response (Welch H1)
 ``step_steer``, ``ramp_steer``              ISO 7401 step metrics, identified eigenvalues
 ``slow_ramp_steer``, ``constant_radius``    ISO 4138 gradients, understeer, char. speed
+``double_lane_change``                      ISO 3888-2 clearance to the cones, pass/fail
 every run with a vehicle                    eigenvalues of the linearized 8-DOF vs speed
 ==========================================  =============================================
 
@@ -29,12 +30,16 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
+import control
 import numpy as np
 
 from fourws_analysis import frequency as fq
-from fourws_analysis import identify, iso4138, iso7401, linear, linearize
+from fourws_analysis import identify, iso4138, iso7401, lane_change, linear, linearize, units
 from fourws_analysis.bag import MetricUnavailableError, UniformRun
+from fourws_control import Law, LinearGains, make_law
 from fourws_sim.errors import FourwsError
+from fourws_sim.models import get_model
+from fourws_sim.params import vehicle_from_mapping
 
 STEP_MANEUVERS = ("step_steer", "ramp_steer")
 STEADY_MANEUVERS = ("slow_ramp_steer", "constant_radius")
@@ -54,6 +59,10 @@ STEER_REFERENCES = {
 Progress = Callable[[str], None]
 #: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options.
 _SWEEP_CACHE: dict[str, Any] = {}
+#: Open-loop 8-DOF Jacobians at straight running already computed in this process, by vehicle
+#: and speed (a run's overlays, its sampled loop and the points of a study share them).
+_JACOBIAN_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+_JACOBIAN_CACHE_SIZE = 256
 
 
 @dataclass
@@ -68,8 +77,10 @@ class RunAnalysis:
     frequency : dict of str to FrequencyResponse
         Keyed ``"<output>/<input>"``.
     frequency_metrics : dict of str to ResponseMetrics
-    models : dict of str to LinearSystem
-        Linear models for the overlays (``"2dof"``, ``"3dof"``, ``"8dof-lin"``).
+    models : dict of str to control.StateSpace
+        Linear models for the overlays (``"2dof"``, ``"3dof"``, ``"8dof-lin"``): input the
+        front road-wheel angle, outputs named by run channel
+        (:func:`fourws_analysis.linear.linear_system`, :func:`eightdof_linear_system`).
     step : iso7401.StepResult or None
     steady : iso4138.SteadyStateHandling or None
     modes : identify.IdentifiedModes or None
@@ -95,9 +106,10 @@ class RunAnalysis:
     vehicle: Any = None
     frequency: dict[str, fq.FrequencyResponse] = field(default_factory=dict)
     frequency_metrics: dict[str, fq.ResponseMetrics] = field(default_factory=dict)
-    models: dict[str, fq.LinearSystem] = field(default_factory=dict)
+    models: dict[str, control.StateSpace] = field(default_factory=dict)
     step: iso7401.StepResult | None = None
     steady: iso4138.SteadyStateHandling | None = None
+    lane_change: lane_change.LaneChangeResult | None = None
     modes: identify.IdentifiedModes | None = None
     sampled: dict[str, linear.SampledLoop] = field(default_factory=dict)
     eig_sweep: linearize.EigenSweep | None = None
@@ -165,14 +177,16 @@ class RunAnalysis:
             out["iso7401_step"] = self.step.to_dict()
         if self.steady is not None:
             out["iso4138_steady_state"] = self.steady.to_dict()
+        if self.lane_change is not None:
+            out["iso3888_lane_change"] = self.lane_change.to_dict()
         if self.modes is not None:
             out["identified_modes"] = self.modes.to_dict()
         if self.models:
             out["model_eigenvalues_per_s"] = {
-                k: [[float(e.real), float(e.imag)] for e in _lateral_modes(m.eigenvalues)]
+                k: [[float(e.real), float(e.imag)] for e in _lateral_modes(m.poles())]
                 for k, m in self.models.items()}
             out["model_steady_state_gains"] = {
-                k: {o: m.dc_gain(o) for o in m.C}
+                k: {o: fq.dc_gain(m, o) for o in m.output_labels}
                 for k, m in self.models.items()}
         if self.sampled:
             out["model_sampled_eigenvalues"] = {k: v.to_dict() for k, v in self.sampled.items()}
@@ -181,7 +195,7 @@ class RunAnalysis:
                 k: [{"identified": [e.real, e.imag], "model": [p.real, p.imag],
                      "relative_difference": rel}
                     for e, p, rel in identify.match_eigenvalues(
-                        self.modes.eigenvalues, _lateral_modes(m.eigenvalues))]
+                        self.modes.eigenvalues, _lateral_modes(m.poles()))]
                 for k, m in self.models.items()}
         if self.eig_sweep is not None:
             out["eigenvalues_vs_speed"] = self.eig_sweep.to_dict()
@@ -216,8 +230,6 @@ def _lateral_modes(eig: np.ndarray) -> np.ndarray:
 
 def _vehicle(run: UniformRun, key: str = "vehicle") -> Any:
     """The vehicle (or the controller's ``belief_vehicle``) of the run configuration."""
-    from fourws_sim.params import vehicle_from_mapping
-
     data = run.config.get(key)
     if not isinstance(data, Mapping):
         raise MetricUnavailableError(f"run_config has no {key!r} mapping: model overlays and "
@@ -244,60 +256,72 @@ def _speed(run: UniformRun) -> float:
 
 def _eightdof_loop(vehicle: Any, speed_mps: float, law: Any, belief_vehicle: Any,
                    law_options: Mapping[str, Any] | None
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, Any]:
-    """Open-loop 8-DOF Jacobians at straight running and the law's gains in its state order:
-    ``(a, b, k_x, k_f, model module)``, ``delta_r = k_x x + k_f delta_f``. ``law`` is a name
-    (built on the belief vehicle with ``law_options``) or a built law."""
-    from fourws_control import Law, Signal, make_law
-    from fourws_sim.models import get_model
-
+                   ) -> tuple[np.ndarray, np.ndarray, LinearGains, Any]:
+    """Open-loop 8-DOF Jacobians at straight running and the law written in its state and
+    input order (:meth:`fourws_control.base.Law.linear_gains` on ``8dof``):
+    ``(a, b, gains, model module)``, ``delta_r = K_x x + K_u u``. ``law`` is a name (built on
+    the belief vehicle with ``law_options``) or a built law."""
     mod = get_model("8dof")
-    p = mod.params_for(vehicle)
-    x0 = mod.initial_state(p, speed_mps)
-    u0 = np.zeros(len(mod.INPUT))
-    a, b = linearize.jacobians(mod.derivatives, x0, u0, p)
-    s = mod.STATE
-    k_x = np.zeros(a.shape[0])
-    k_f = 0.0
-    if isinstance(law, Law) or law != "fws":
-        law_obj = law if isinstance(law, Law) else make_law(
-            law, belief_vehicle if belief_vehicle is not None else vehicle,
-            **dict(law_options or {}))
-        k = law_obj.gains(speed_mps)
-        k_f = float(k[Signal.DELTA_F])
-        k_x[s.R] = k[Signal.YAW_RATE]
-        k_x[s.PHI] = k[Signal.ROLL]
-        k_x[s.P] = k[Signal.ROLL_RATE]
-        k_x[s.V] = k[Signal.LATERAL_VELOCITY]
-    return a, b, k_x, k_f, mod
+    key = json.dumps([vehicle.to_dict(), float(speed_mps)], sort_keys=True, default=str)
+    if key not in _JACOBIAN_CACHE:
+        p = mod.params_for(vehicle)
+        x0 = mod.initial_state(p, speed_mps)
+        u0 = np.zeros(len(mod.INPUT))
+        if len(_JACOBIAN_CACHE) >= _JACOBIAN_CACHE_SIZE:
+            _JACOBIAN_CACHE.pop(next(iter(_JACOBIAN_CACHE)))
+        _JACOBIAN_CACHE[key] = linearize.jacobians(mod.derivatives, x0, u0, p)
+    a, b = (m.copy() for m in _JACOBIAN_CACHE[key])
+    law_obj = law if isinstance(law, Law) else make_law(
+        law, belief_vehicle if belief_vehicle is not None else vehicle,
+        **dict(law_options or {}))
+    return a, b, law_obj.linear_gains("8dof", vehicle, speed_mps), mod
 
 
-def eightdof_linear_system(vehicle: Any, speed_mps: float, law: str = "fws",
+def _coupled(a_cl: np.ndarray) -> np.ndarray:
+    """Indices of the states with a nonzero column in ``a_cl``: all but the earth-frame
+    position, which nothing depends on (its eigenvalues s = 0, z = 1 are left out). The
+    heading stays: it moves the lateral position, and it keeps one zero eigenvalue."""
+    return np.nonzero(np.any(np.abs(a_cl) > 0.0, axis=0))[0]
+
+
+def eightdof_linear_system(vehicle: Any, speed_mps: float, law: Any = "fws",
                            belief_vehicle: Any = None,
-                           law_options: Mapping[str, Any] | None = None) -> fq.LinearSystem:
+                           law_options: Mapping[str, Any] | None = None
+                           ) -> control.StateSpace:
     """The 8-DOF model linearized at straight running (finite differences), law closed.
 
-    The law's gains (:meth:`fourws_control.base.Law.gains` at the speed) are applied to the
-    8-DOF states with the same meaning (yaw rate, roll, roll rate, lateral velocity); the
-    actuator limits are inactive for small signals.
+    The law enters through its own linear gains in the 8-DOF's state order
+    (:meth:`fourws_control.base.Law.linear_gains`, :func:`fourws_analysis.linear.close_loop`);
+    the actuator limits are inactive for small signals. The earth-frame position, which
+    nothing depends on, is left out. A stays singular (heading; the speed and wheel-spin
+    modes at a trim without drag), but no output sees those modes:
+    :func:`fourws_analysis.frequency.dc_gain` takes the limit at a tiny frequency. ``law`` is
+    a name or a built :class:`fourws_control.Law`.
+
+    Returns
+    -------
+    control.StateSpace
+        Input ``front_wheel_angle_rad`` (rad); states named by the 8-DOF's ``STATE``; outputs
+        ``yaw_rate_radps``, ``sideslip_rad`` (V/U), ``lateral_accel_mps2`` (dV/dt + U r),
+        ``roll_rad`` and ``rear_wheel_angle_rad`` (the law's command).
     """
-    a, b, k_x, k_f, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
+    a, b, g, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
     s, i = mod.STATE, mod.INPUT
-    n = a.shape[0]
-    a_cl = a + np.outer(b[:, i.DELTA_R], k_x)
-    b_cl = b[:, i.DELTA_F] + b[:, i.DELTA_R] * k_f
-    # position and heading feed nothing back (zero columns): drop them, so A is invertible
-    # and the steady-state gains exist
-    keep = np.nonzero(np.any(np.abs(a_cl) > 0.0, axis=0))[0]
-    a_cl, b_cl, k_x = a_cl[np.ix_(keep, keep)], b_cl[keep], k_x[keep]
-    e = np.eye(n)[:, keep]  # row j: state j in the reduced coordinates
+    a_cl, b_cl = linear.close_loop(a, b, g, i.DELTA_R, [i.DELTA_F])
+    keep = _coupled(a_cl)
+    a_cl, b_cl, k_x = a_cl[np.ix_(keep, keep)], b_cl[keep], g.K_x[keep]
+    e = np.eye(a.shape[0])[:, keep]  # row j: state j in the reduced coordinates
     i_v = list(keep).index(s.V)
-    C = {"yaw_rate_radps": e[s.R], "sideslip_rad": e[s.V] / speed_mps,
-         "lateral_accel_mps2": a_cl[i_v] + speed_mps * e[s.R],
-         "roll_rad": e[s.PHI], "rear_wheel_angle_rad": k_x}
-    D = {"yaw_rate_radps": 0.0, "sideslip_rad": 0.0, "lateral_accel_mps2": float(b_cl[i_v]),
-         "roll_rad": 0.0, "rear_wheel_angle_rad": k_f}
-    return fq.LinearSystem(f"8dof linearized {law}", a_cl, b_cl, C, D)
+    outputs = {"yaw_rate_radps": (e[s.R], 0.0), "sideslip_rad": (e[s.V] / speed_mps, 0.0),
+               "lateral_accel_mps2": (a_cl[i_v] + speed_mps * e[s.R], float(b_cl[i_v, 0])),
+               "roll_rad": (e[s.PHI], 0.0),
+               "rear_wheel_angle_rad": (k_x, float(g.K_u[i.DELTA_F]))}
+    C = np.array([c for c, _ in outputs.values()])
+    D = np.array([[d] for _, d in outputs.values()])
+    name = law.name if isinstance(law, Law) else law
+    return control.ss(a_cl, b_cl, C, D, inputs=[units.ROAD_WHEEL.channel],
+                      outputs=list(outputs), states=[s(k).name for k in keep],
+                      name=f"8dof linearized {name}")
 
 
 def eightdof_sampled_loop(vehicle: Any, speed_mps: float, period_s: float, law: Any = "fws",
@@ -305,13 +329,13 @@ def eightdof_sampled_loop(vehicle: Any, speed_mps: float, period_s: float, law: 
                           law_options: Mapping[str, Any] | None = None) -> linear.SampledLoop:
     """The linearized 8-DOF of :func:`eightdof_linear_system` with the law's command held over
     each control period ``period_s`` (s). ``law`` is a name or a built
-    :class:`fourws_control.Law`. Position and heading, which feed nothing back, are left out
-    (they would add eigenvalues z = 1); the speed and wheel-spin modes stay (z = 1 at a trim
-    without drag, ``ln(z)/T = 0``)."""
-    a, b, k_x, _, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
+    :class:`fourws_control.Law`. The earth-frame position, which nothing depends on, is left
+    out (it would add eigenvalues z = 1); the heading, speed and wheel-spin modes stay (z = 1
+    at a trim without drag, ``ln(z)/T = 0``)."""
+    a, b, g, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
     b_r = b[:, mod.INPUT.DELTA_R]
-    keep = np.nonzero(np.any(np.abs(a + np.outer(b_r, k_x)) > 0.0, axis=0))[0]
-    return linear.sample_loop(a[np.ix_(keep, keep)], b_r[keep], k_x[keep], period_s)
+    keep = _coupled(a + np.outer(b_r, g.K_x))
+    return linear.sample_loop(a[np.ix_(keep, keep)], b_r[keep], g.K_x[keep], period_s)
 
 
 def _law_period(run: UniformRun) -> float | None:
@@ -327,8 +351,6 @@ def _law_period(run: UniformRun) -> float | None:
 def _sampled_models(res: RunAnalysis, vehicle: Any, speed: float, period: float,
                     belief: Any, options: Mapping[str, Any]) -> None:
     """Fill ``res.sampled`` for the models of ``res.models``."""
-    from fourws_control import make_law
-
     def analytic(model: str) -> linear.SampledLoop:
         law = make_law(res.law, belief if belief is not None else vehicle, **dict(options))
         return linear.sampled_closed_loop(model, vehicle, law, speed, period)
@@ -353,7 +375,7 @@ def _try(result: RunAnalysis, metric: str, fn: Callable[[], Any]) -> Any:
     return None
 
 
-def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
+def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
                 progress: Progress | None = None) -> RunAnalysis:
     """Compute every metric ``run`` can give (see the module docstring).
 
@@ -362,6 +384,9 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
     run : UniformRun
     eig_sweep : bool
         Also compute the eigenvalues of the linearized 8-DOF vs speed.
+    models : bool
+        Also build the linear model overlays (2-DOF, 3-DOF, 8-DOF linearized, each also
+        sampled); False gives the metrics of the record alone.
     progress : callable, optional
         Called with a short description before each step.
     """
@@ -398,13 +423,13 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
     period = _law_period(run)
     if period is not None:
         options = {**options, "control_period_s": period}
-    if vehicle is not None and math.isfinite(speed):
+    if models and vehicle is not None and math.isfinite(speed):
         for model in ("2dof", "3dof"):
             if model == "3dof" and vehicle.roll is None:
                 continue
             sys_ = _try(res, f"model_{model}",
-                        lambda m=model: fq.linear_system(vehicle, m, speed, res.law,
-                                                         belief, options))
+                        lambda m=model: linear.linear_system(vehicle, m, speed, res.law,
+                                                             belief, options))
             if sys_ is not None:
                 res.models[model] = sys_
         if vehicle.body is not None:
@@ -415,6 +440,8 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
                 res.models["8dof-lin"] = sys8
         if period is not None:
             _sampled_models(res, vehicle, speed, period, belief, options)
+    elif not models:
+        res.notes.append("linear model overlays not asked for")
 
     # frequency response
     if man in fq.FREQUENCY_MANEUVERS:
@@ -489,11 +516,21 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True,
             f"needs a slow_ramp_steer or constant_radius run; this run is "
             f"{man or 'unrecognized'}")
 
+    # ISO 3888-2
+    if man == "double_lane_change":
+        tick(f"{run.name}: lane change")
+        res.lane_change = _try(res, "iso3888_lane_change",
+                               lambda: lane_change.lane_change_of_run(
+                                   ch["x_m"], ch["y_m"], run.config["maneuver"]))
+    else:
+        res.unavailable["iso3888_lane_change"] = (f"needs a double_lane_change run; this run "
+                                                  f"is {man or 'unrecognized'}")
+
     if eig_sweep and vehicle is not None and vehicle.body is not None:
         tick(f"{run.name}: 8-DOF eigenvalues vs speed")
 
         def sweep() -> linearize.EigenSweep:
-            rows = [eightdof_linear_system(vehicle, v, res.law, belief, options).eigenvalues
+            rows = [eightdof_linear_system(vehicle, v, res.law, belief, options).poles()
                     for v in SWEEP_SPEEDS_MPS]
             width = max(len(_lateral_modes(r)) for r in rows)
             arr = np.full((len(rows), width), np.nan, dtype=complex)

@@ -12,8 +12,10 @@ with :math:`u` the input (front road-wheel angle, rad, or steering-wheel angle, 
 H1 is unbiased by output noise; coherence :math:`\gamma^2` near 1 marks the frequencies where
 the estimate can be trusted.
 
-Analytic response of a linear model ``dx/dt = A x + B u``, ``y = C x + D u``:
-:math:`H(j\omega) = C (j\omega I - A)^{-1} B + D`, with :math:`\omega = 2\pi f`.
+Analytic response of a linear model ``dx/dt = A x + B u``, ``y = C x + D u`` (a python-control
+``StateSpace`` with named outputs and inputs, e.g. from
+:func:`fourws_analysis.linear.linear_system`): :math:`H(j\omega) = C (j\omega I - A)^{-1} B + D`,
+with :math:`\omega = 2\pi f` (:func:`model_response`, :func:`dc_gain`).
 
 Frequencies are in Hz throughout; phases in degrees; gains in output unit per input unit.
 """
@@ -22,8 +24,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
+import control
 import numpy as np
 from scipy import signal
 
@@ -372,104 +375,61 @@ def response_metrics(fr: FrequencyResponse, coherence_min: float = COHERENCE_MIN
 
 
 # --------------------------------------------------------------------------------------------
-# analytic responses of linear models
+# analytic responses of linear models (python-control ``StateSpace``)
 
 
-@dataclass
-class LinearSystem:
-    """A linear model with one driver input and named outputs.
-
-    ``dx/dt = A x + b u``, output ``name`` is ``C[name] @ x + D[name] * u``; ``u`` is the front
-    road-wheel angle in rad.
-
-    Attributes
-    ----------
-    label : str
-        Legend label (e.g. ``"2dof + sol1, 20 m/s"``).
-    A : ndarray (n, n)
-    b : ndarray (n,)
-    C : dict of str to ndarray (n,)
-    D : dict of str to float
-    """
-
-    label: str
-    A: np.ndarray
-    b: np.ndarray
-    C: dict[str, np.ndarray]
-    D: dict[str, float]
-
-    def response(self, output: str, freq_hz: np.ndarray) -> FrequencyResponse:
-        """Frequency response of ``output`` per front road-wheel angle at ``freq_hz`` (Hz)."""
-        n = self.A.shape[0]
-        eye = np.eye(n)
-        h = np.array([self.C[output] @ np.linalg.solve(2j * math.pi * fk * eye - self.A, self.b)
-                      + self.D[output] for fk in np.asarray(freq_hz, dtype=float)])
-        return FrequencyResponse(output, "front_wheel_angle_rad", np.asarray(freq_hz, float), h,
-                                 None, self.label)
-
-    def dc_gain(self, output: str) -> float:
-        """Steady-state gain of ``output`` per front road-wheel angle.
-
-        ``C (-A)^{-1} b + D``; when A is singular (the 8-DOF's coasting-speed and wheel-spin
-        modes have zero eigenvalues at a trim without drag, but the steer does not reach them)
-        the limit of the response at :data:`DC_LIMIT_HZ` is returned.
-        """
-        try:
-            return float(self.C[output] @ np.linalg.solve(-self.A, self.b) + self.D[output])
-        except np.linalg.LinAlgError:
-            return float(self.response(output, np.array([DC_LIMIT_HZ])).response[0].real)
-
-    @property
-    def eigenvalues(self) -> np.ndarray:
-        """Eigenvalues of A in 1/s."""
-        return np.linalg.eigvals(self.A)
-
-
-#: Output names of :func:`fourws_analysis.linear.output_matrices` -> run channel names.
-_LINEAR_OUTPUTS = {"yaw_rate": "yaw_rate_radps", "lateral_acceleration": "lateral_accel_mps2",
-                   "sideslip": "sideslip_rad", "roll": "roll_rad",
-                   "lateral_velocity": "lateral_velocity_mps"}
-
-
-def linear_system(vehicle: Any, model_name: str, speed_mps: float, law: str = "fws",
-                  belief_vehicle: Any = None, law_options: Mapping[str, Any] | None = None
-                  ) -> LinearSystem:
-    """Closed-loop linear model (``2dof`` or ``3dof``) of ``vehicle`` with rear-steer ``law``.
-
-    Built by :func:`fourws_analysis.linear.closed_loop` (the law closed through its linear
-    gains, ``delta_r = K_x x + K_u u``, so ``A_cl = A + B_r K_x``, ``b_cl = B_f + B_r K_u,f``)
-    and :func:`fourws_analysis.linear.output_matrices` (yaw rate, ``a_y = dV/dt + U r``,
-    sideslip ``V/U``, roll), with the front road-wheel angle as the one input.
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-        The true vehicle.
-    model_name : str
-        ``"2dof"`` or ``"3dof"``.
-    speed_mps : float
-        Forward speed U, m/s.
-    law : str
-        Rear-steer law name (``fws`` = no rear steer).
-    belief_vehicle : Vehicle, optional
-        The vehicle the controller believes in (default: the true one).
-    law_options : mapping, optional
-        Options of the law (``make_law`` keywords).
+def _port(system: control.StateSpace, output: str, input_name: str) -> tuple[int, int]:
+    """Indices of output ``output`` and input ``input_name`` of ``system``.
 
     Raises
     ------
-    UnknownNameError, IncompatibleError, ParameterError
-        From the model and law registries.
+    MetricUnavailableError
+        The system has no such output or input.
     """
-    from fourws_analysis import linear
-    from fourws_control import make_law
+    i, j = system.find_output(output), system.find_input(input_name)
+    if i is None or j is None:
+        missing = f"output {output!r}" if i is None else f"input {input_name!r}"
+        raise MetricUnavailableError(
+            f"linear model {system.name!r} has no {missing}; outputs "
+            f"{', '.join(system.output_labels)}, inputs {', '.join(system.input_labels)}")
+    return i, j
 
-    law_obj = make_law(law, belief_vehicle if belief_vehicle is not None else vehicle,
-                       **dict(law_options or {}))
-    cl = linear.closed_loop(model_name, vehicle, law_obj, speed_mps)
-    i_f = list(cl.input_names).index("DELTA_F")
-    names, c_mat, d_mat = linear.output_matrices(cl)
-    C = {_LINEAR_OUTPUTS[n]: c_mat[k] for k, n in enumerate(names) if n in _LINEAR_OUTPUTS}
-    D = {_LINEAR_OUTPUTS[n]: float(d_mat[k, i_f]) for k, n in enumerate(names)
-         if n in _LINEAR_OUTPUTS}
-    return LinearSystem(f"{model_name} {law}", cl.A, cl.B[:, i_f], C, D)
+
+def model_response(system: control.StateSpace, output: str, freq_hz: np.ndarray,
+                   input_name: str = units.ROAD_WHEEL.channel) -> FrequencyResponse:
+    """Frequency response of output ``output`` of ``system`` per its input ``input_name``
+    (default the front road-wheel angle, rad) at ``freq_hz`` (Hz):
+    ``C (j 2 pi f I - A)^-1 B + D``, evaluated by python-control. The system's name is the
+    response's label.
+
+    Raises
+    ------
+    MetricUnavailableError
+        The system has no such output or input.
+    """
+    i, j = _port(system, output, input_name)
+    f = np.asarray(freq_hz, dtype=float)
+    h = system(2j * math.pi * np.atleast_1d(f), squeeze=False)[i, j]
+    return FrequencyResponse(output, input_name, f, h.reshape(f.shape), None, system.name)
+
+
+def dc_gain(system: control.StateSpace, output: str,
+            input_name: str = units.ROAD_WHEEL.channel) -> float:
+    """Steady-state gain of output ``output`` of ``system`` per input ``input_name`` (default
+    the front road-wheel angle), output unit per input unit.
+
+    ``C (-A)^{-1} B + D``; when A is singular (the 8-DOF's coasting-speed and wheel-spin modes
+    have zero eigenvalues at a trim without drag, but the steer does not reach them) the limit
+    of the response at :data:`DC_LIMIT_HZ` is returned.
+
+    Raises
+    ------
+    MetricUnavailableError
+        The system has no such output or input.
+    """
+    i, j = _port(system, output, input_name)
+    try:
+        return float(system.C[i] @ np.linalg.solve(-system.A, system.B[:, j]) + system.D[i, j])
+    except np.linalg.LinAlgError:
+        return float(model_response(system, output, np.array([DC_LIMIT_HZ]),
+                                    input_name).response[0].real)

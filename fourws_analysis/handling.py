@@ -27,8 +27,8 @@ import numpy as np
 import scipy.optimize
 
 from fourws_analysis.linear import closed_loop, critical_speed, steady_state_gains
-from fourws_control._vehicle import bicycle
 from fourws_control.base import Law, check_speed
+from fourws_control.bicycle import bicycle
 from fourws_control.registry import make_law
 from fourws_sim.errors import IncompatibleError, ParameterError
 from fourws_sim.params import GRAVITY_MPS2, Vehicle

@@ -15,10 +15,13 @@ or steering torque for free control). Everything else here works on that closed 
 eigenvalues with natural frequencies (Hz) and damping ratios, the Routh-Hurwitz array of its
 characteristic polynomial, controllability through the rear steer, the critical speed,
 transfer functions, Bode data (frequencies in Hz), steady-state gains and the Lyapunov
-check of chapter 5. python-control builds the LTI objects; scipy solves the Lyapunov
-equation. :func:`sampled_closed_loop` closes the same loop as the controller runs it, the
-command held over each control period (zero-order hold): eigenvalues in the z-plane and
-mapped to the s-plane, ``ln(z) / T``. Results are dataclasses with ``to_dict()`` for JSON.
+check of chapter 5. The closed loop is a python-control ``StateSpace``
+(:attr:`ClosedLoop.system`, states, inputs and outputs named), the one representation of a
+linear model in fourws (:func:`linear_system` gives it with the run channels' names, as the
+analysis of recorded runs compares with it); scipy solves the Lyapunov equation.
+:func:`sampled_closed_loop` closes the same loop as the controller runs it, the command held
+over each control period (zero-order hold): eigenvalues in the z-plane and mapped to the
+s-plane, ``ln(z) / T``. Results are dataclasses with ``to_dict()`` for JSON.
 
 Outputs of the transfer functions (SI, per unit of the driver input): ``yaw_rate`` (rad/s),
 ``lateral_acceleration`` :math:`a_y = \dot V + U r` (m/s^2), ``sideslip``
@@ -31,7 +34,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import control
 import numpy as np
@@ -39,10 +42,13 @@ import scipy.linalg
 import scipy.optimize
 import scipy.signal
 
-from fourws_control.base import Law, check_option, check_speed
+from fourws_analysis.frequency import break_phase_jumps, dc_gain
+from fourws_analysis.units import ROAD_WHEEL
+from fourws_control.base import Law, LinearGains, check_option, check_speed
 from fourws_control.registry import make_law
 from fourws_control.signals import LINEAR_MODELS, signal_map
-from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
+from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError, \
+    UnknownNameError
 from fourws_sim.models import get_model
 from fourws_sim.params import Vehicle
 
@@ -69,7 +75,6 @@ def _law(law: Law | str | None, vehicle: Vehicle) -> Law:
 
 def _check_model_name(model_name: str) -> None:
     if model_name not in LINEAR_MODELS:
-        from fourws_sim.errors import UnknownNameError
         raise UnknownNameError("linear model", str(model_name), list(LINEAR_MODELS))
 
 
@@ -83,25 +88,39 @@ class ClosedLoop:
         Model and law names.
     speed_mps : float
         Forward speed U, m/s.
-    A : numpy.ndarray
-        Closed-loop state matrix (n x n).
-    B : numpy.ndarray
-        Closed-loop input matrix for the driver inputs (n x m).
+    system : control.StateSpace
+        The closed loop: states named by the model's ``STATE``, inputs the driver's (model
+        ``INPUT`` names), outputs the standard outputs of the module docstring (SI).
     A_open, b_rear : numpy.ndarray
         Open-loop state matrix and rear-steer column (for controllability).
-    state_names, input_names : tuple of str
-        Model ``STATE`` names and the driver-input names.
     """
 
     model: str
     law: str
     speed_mps: float
-    A: np.ndarray
-    B: np.ndarray
+    system: control.StateSpace
     A_open: np.ndarray
     b_rear: np.ndarray
-    state_names: tuple[str, ...]
-    input_names: tuple[str, ...]
+
+    @property
+    def A(self) -> np.ndarray:
+        """Closed-loop state matrix (n x n), 1/s."""
+        return self.system.A
+
+    @property
+    def B(self) -> np.ndarray:
+        """Closed-loop input matrix for the driver inputs (n x m)."""
+        return self.system.B
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Model ``STATE`` names."""
+        return tuple(self.system.state_labels)
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """Driver-input names (model ``INPUT`` names)."""
+        return tuple(self.system.input_labels)
 
     def state_index(self, name: str) -> int:
         """Index of state ``name`` (e.g. ``"V"``)."""
@@ -143,15 +162,46 @@ def closed_loop(model_name: str, vehicle: Vehicle, law: Law | str | None,
     A, B = get_model(model_name).matrices(vehicle, speed)
     smap = signal_map(model_name)
     g = law_obj.linear_gains(model_name, vehicle, speed)
-    b_r = B[:, smap.rear_input]
-    drv = list(smap.driver_inputs)
-    A_cl = A + np.outer(b_r, g.K_x)
-    B_cl = B[:, drv] + np.outer(b_r, g.K_u[drv])
+    A_cl, B_cl = close_loop(A, B, g, smap.rear_input, smap.driver_inputs)
     if not (np.all(np.isfinite(A_cl)) and np.all(np.isfinite(B_cl))):
         raise NonFiniteError(f"closed loop {model_name}/{law_obj.name} at {speed} m/s "
                              "is not finite")
-    return ClosedLoop(model_name, law_obj.name, speed, A_cl, B_cl, A, b_r,
-                      smap.state_names, tuple(smap.input_names[i] for i in drv))
+    names, C, D = _standard_outputs(A_cl, B_cl, smap.state_names, speed)
+    inputs = [smap.input_names[i] for i in smap.driver_inputs]
+    system = control.ss(A_cl, B_cl, C, D, inputs=inputs, outputs=names,
+                        states=list(smap.state_names), name=f"{model_name} {law_obj.name}")
+    return ClosedLoop(model_name, law_obj.name, speed, system, A, B[:, smap.rear_input])
+
+
+def close_loop(A: np.ndarray, B: np.ndarray, gains: LinearGains, rear_input: int,
+               driver_inputs: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+    r"""Close ``dx/dt = A x + B u`` with the law ``delta_r = K_x x + K_u u``.
+
+    .. math::
+
+        A_{cl} = A + b_r K_x, \qquad B_{cl} = B_d + b_r K_{u,d}
+
+    with :math:`b_r` column ``rear_input`` of B and :math:`d` the ``driver_inputs``.
+
+    Parameters
+    ----------
+    A, B : numpy.ndarray
+        Open-loop matrices (n x n, n x m) in the order of ``gains``.
+    gains : LinearGains
+        The law in the model's state/input order (:meth:`fourws_control.base.Law.linear_gains`).
+    rear_input : int
+        Index of the rear-steer input.
+    driver_inputs : sequence of int
+        Inputs kept as the closed loop's inputs, in order.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``A_cl`` (n x n) and ``B_cl`` (n x len(driver_inputs)).
+    """
+    b_r = B[:, rear_input]
+    drv = list(driver_inputs)
+    return A + np.outer(b_r, gains.K_x), B[:, drv] + np.outer(b_r, gains.K_u[drv])
 
 
 # ----------------------------------------------------------------------------- eigenvalues
@@ -518,8 +568,14 @@ def critical_speed(model_name: str, vehicle: Vehicle, law: Law | str | None = No
 
 def output_matrices(cl: ClosedLoop) -> tuple[list[str], np.ndarray, np.ndarray]:
     """Names, C and D of the standard outputs of ``cl`` (see module docstring)."""
-    S = cl.state_names
-    n, m = cl.A.shape[0], cl.B.shape[1]
+    return list(cl.system.output_labels), cl.system.C, cl.system.D
+
+
+def _standard_outputs(A: np.ndarray, B: np.ndarray, state_names: Sequence[str],
+                      speed_mps: float) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Names, C and D of the standard outputs of the closed loop ``(A, B)``."""
+    S = list(state_names)
+    n, m = A.shape[0], B.shape[1]
     iv, ir = S.index("V"), S.index("R")
     names: list[str] = []
     rows_c: list[np.ndarray] = []
@@ -532,8 +588,8 @@ def output_matrices(cl: ClosedLoop) -> tuple[list[str], np.ndarray, np.ndarray]:
 
     e = np.eye(n)
     add("yaw_rate", e[ir])
-    add("lateral_acceleration", cl.A[iv] + cl.speed_mps * e[ir], cl.B[iv].copy())
-    add("sideslip", e[iv] / cl.speed_mps)
+    add("lateral_acceleration", A[iv] + speed_mps * e[ir], B[iv].copy())
+    add("sideslip", e[iv] / speed_mps)
     add("lateral_velocity", e[iv])
     for state, name in (("PHI", "roll"), ("DELTA_F", "front_steer")):
         if state in S:
@@ -549,10 +605,62 @@ INPUT_UNITS = {"DELTA_F": "rad", "T_F": "N m"}
 
 def state_space(cl: ClosedLoop) -> tuple[control.StateSpace, list[str]]:
     """python-control ``StateSpace`` of ``cl`` with the standard outputs, and their names."""
-    names, C, D = output_matrices(cl)
-    sys = control.ss(cl.A, cl.B, C, D, inputs=list(cl.input_names), outputs=names,
-                     states=list(cl.state_names))
-    return sys, names
+    return cl.system, list(cl.system.output_labels)
+
+
+#: Standard outputs (:func:`output_matrices`) -> run channel names
+#: (:mod:`fourws_analysis.units`).
+RUN_CHANNELS = {"yaw_rate": "yaw_rate_radps", "lateral_acceleration": "lateral_accel_mps2",
+                "sideslip": "sideslip_rad", "roll": "roll_rad",
+                "lateral_velocity": "lateral_velocity_mps"}
+
+
+def linear_system(vehicle: Vehicle, model_name: str, speed_mps: float, law: str = "fws",
+                  belief_vehicle: Vehicle | None = None,
+                  law_options: Mapping[str, Any] | None = None) -> control.StateSpace:
+    """Closed-loop linear model (``2dof`` or ``3dof``) of ``vehicle`` with rear-steer ``law``,
+    as recorded runs are compared with it.
+
+    :func:`closed_loop` (the law closed through its linear gains) with the front road-wheel
+    angle as the one input, named ``front_wheel_angle_rad`` (rad), and the standard outputs
+    renamed to the run channels they match (:data:`RUN_CHANNELS`: yaw rate rad/s, lateral
+    acceleration m/s^2, sideslip rad, lateral velocity m/s, roll rad). Its response is
+    :func:`fourws_analysis.frequency.model_response`, its steady-state gains
+    :func:`fourws_analysis.frequency.dc_gain`, its eigenvalues ``poles()`` (1/s).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The true vehicle.
+    model_name : str
+        ``"2dof"`` or ``"3dof"``.
+    speed_mps : float
+        Forward speed U, m/s.
+    law : str
+        Rear-steer law name (``fws`` = no rear steer).
+    belief_vehicle : Vehicle, optional
+        The vehicle the controller believes in (default: the true one).
+    law_options : mapping, optional
+        Options of the law (``make_law`` keywords).
+
+    Raises
+    ------
+    UnknownNameError, IncompatibleError, ParameterError
+        From the model and law registries; IncompatibleError also for a model whose driver
+        input is not the front road-wheel angle (free control).
+    """
+    law_obj = make_law(law, belief_vehicle if belief_vehicle is not None else vehicle,
+                       **dict(law_options or {}))
+    cl = closed_loop(model_name, vehicle, law_obj, speed_mps)
+    if "DELTA_F" not in cl.input_names:
+        raise IncompatibleError(f"model {model_name!r} is not driven by the front road-wheel "
+                                f"angle (its driver inputs: {', '.join(cl.input_names)})")
+    outputs = [n for n in cl.system.output_labels if n in RUN_CHANNELS]
+    system = cl.system[outputs, ["DELTA_F"]]
+    return control.ss(system.A, system.B, system.C, system.D,
+                      inputs=[ROAD_WHEEL.channel],
+                      outputs=[RUN_CHANNELS[n] for n in outputs],
+                      states=list(cl.state_names), name=f"{model_name} {law}")
 
 
 @dataclass(frozen=True)
@@ -573,13 +681,11 @@ class TransferFunction:
 
 def transfer_functions(cl: ClosedLoop) -> list[TransferFunction]:
     """Every output/driver-input transfer function of ``cl`` (``control.ss2tf``)."""
-    _, names = state_space(cl)
-    _, C, D = output_matrices(cl)
+    names = list(cl.system.output_labels)
     out = []
     for j, inp in enumerate(cl.input_names):
         for i, name in enumerate(names):
-            siso = control.ss(cl.A, cl.B[:, [j]], C[[i]], D[[i]][:, [j]])
-            tf = control.ss2tf(siso)
+            tf = control.ss2tf(cl.system[i, j])
             num = np.atleast_1d(np.squeeze(tf.num[0][0])).astype(float)
             den = np.atleast_1d(np.squeeze(tf.den[0][0])).astype(float)
             # drop numerically-zero leading numerator terms (relative to the largest)
@@ -631,8 +737,8 @@ def bode(cl: ClosedLoop, frequencies_hz: Sequence[float] | None = None) -> BodeD
         f = np.asarray(frequencies_hz, dtype=float)
         if f.ndim != 1 or f.size == 0 or np.any(~np.isfinite(f)) or np.any(f <= 0.0):
             raise ParameterError("frequencies_hz", "must be a non-empty list of finite values > 0")
-    sys, names = state_space(cl)
-    resp = control.frequency_response(sys, 2.0 * np.pi * f)
+    names = list(cl.system.output_labels)
+    resp = control.frequency_response(cl.system, 2.0 * np.pi * f)
     mag = np.asarray(resp.magnitude).reshape(len(names), len(cl.input_names), len(f))
     ph = np.asarray(resp.phase).reshape(len(names), len(cl.input_names), len(f))
     magnitude, phase, units = {}, {}, {}
@@ -658,7 +764,7 @@ def plot_bode(data: BodeData | Sequence[tuple[str, BodeData]], path: str | Path,
     keys : list of str, optional
         ``"output/input"`` keys to draw (default: every key of the first response).
     """
-    import matplotlib
+    import matplotlib  # here, not at the top: only the plots need it, and it is slow to load
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -668,8 +774,6 @@ def plot_bode(data: BodeData | Sequence[tuple[str, BodeData]], path: str | Path,
     keys = list(keys) if keys is not None else list(series[0][1].magnitude)
     fig, axes = plt.subplots(2, len(keys), figsize=(4.2 * len(keys), 6.0), squeeze=False,
                              sharex=True)
-    from fourws_analysis.frequency import break_phase_jumps
-
     for k, key in enumerate(keys):
         for n, (label, bd) in enumerate(series):
             if key not in bd.magnitude:
@@ -711,10 +815,8 @@ def steady_state_gains(cl: ClosedLoop) -> dict[str, float]:
     if np.linalg.matrix_rank(cl.A) < cl.A.shape[0]:
         raise IncompatibleError(f"{cl.model}/{cl.law} at {cl.speed_mps} m/s has a zero "
                                 "eigenvalue; no steady state")
-    names, C, D = output_matrices(cl)
-    G = -C @ np.linalg.solve(cl.A, cl.B) + D
-    return {f"{name}/{inp}": float(G[i, j]) for j, inp in enumerate(cl.input_names)
-            for i, name in enumerate(names)}
+    return {f"{name}/{inp}": dc_gain(cl.system, name, inp) for inp in cl.input_names
+            for name in cl.system.output_labels}
 
 
 # ------------------------------------------------------------------------------- Lyapunov

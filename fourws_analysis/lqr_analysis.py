@@ -22,8 +22,8 @@ import control
 import numpy as np
 
 from fourws_analysis.linear import controllability
-from fourws_control._vehicle import bicycle
 from fourws_control.base import check_option, check_speed
+from fourws_control.bicycle import bicycle
 from fourws_control.lqr import (LQR_MODELS, LqrWeights, lqr_gain_matrix, weight_matrices)
 from fourws_control.signals import signal_map
 from fourws_sim.errors import ParameterError, UnknownNameError

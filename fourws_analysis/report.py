@@ -162,7 +162,7 @@ def metric_tables(runs: Sequence[RunAnalysis]) -> list[tuple[str, list[TableRow]
               lambda r: _eig_list(r.modes.eigenvalues) or None)]
     for name in ("2dof", "3dof", "8dof-lin"):
         specs.append((f"{MODEL_NAMES[name]} at the run speed", "1/s",
-                      lambda r, n=name: _eig_list(r.models[n].eigenvalues) or None))
+                      lambda r, n=name: _eig_list(r.models[n].poles()) or None))
     # the same models as the controller closes them: command held over its period
     specs.append(("law's control period T", "s",
                   lambda r: next((v.period_s for v in r.sampled.values()), None)))
@@ -193,6 +193,8 @@ td:nth-child(2),th:nth-child(2){text-align:left;color:#555}
 tr:nth-child(even){background:#f7f7f7}
 .reading{background:#f3f6fb;border-left:4px solid #4a72b0;padding:.4em 1em;margin:1em 0}
 img{max-width:100%;border:1px solid #eee;margin:.5em 0}.note{color:#775;font-size:.85em}"""
+#: The reports' style sheet (the study report shares it).
+REPORT_CSS = _CSS
 
 
 def _list_html(items: Sequence[str], cls: str = "") -> str:

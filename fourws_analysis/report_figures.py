@@ -15,7 +15,8 @@ import numpy as np
 
 from fourws_analysis import units
 from fourws_analysis.compare import RunAnalysis
-from fourws_analysis.frequency import COHERENCE_MIN, break_phase_jumps, display_phase_deg
+from fourws_analysis.frequency import (COHERENCE_MIN, break_phase_jumps, display_phase_deg,
+                                       model_response)
 from fourws_analysis.report_texts import (MODEL_NAMES, common_ratio, law_groups, run_label,
                                           stability_notes)
 
@@ -178,11 +179,11 @@ def figure_bode(runs: Sequence[RunAnalysis]) -> Any | None:
             if fr.coherence is not None:
                 ax_c.semilogx(fr.freq_hz, _masked(fr.coherence, ~pos), color=color, lw=1.2)
             for name, system in r.models.items():
-                if out.channel not in system.C:
+                if out.channel not in system.output_labels:
                     continue
                 f_pos = fr.freq_hz[pos]
                 f = np.geomspace(max(float(f_pos[0]), 0.02), float(f_pos[-1]), 300)
-                model = system.response(out.channel, f)
+                model = model_response(system, out.channel, f)
                 style = _MODEL_STYLES.get(name, "--")
                 used_models.add(name)
                 # a model whose gain is zero (e.g. sideslip under a zero-sideslip law) would
@@ -350,7 +351,7 @@ def figure_eigenvalues(runs: Sequence[RunAnalysis]) -> Any | None:
             handles["8-DOF linearized vs speed (colour: speed)"] = Line2D(
                 [], [], ls="", marker="o", ms=5, color="tab:green")
         for name, m in first.models.items():
-            e = m.eigenvalues
+            e = m.poles()
             e = e[(np.abs(e) > 1e-6) & (e.real > -EIG_PLOT_MIN_REAL)]
             marker = _EIG_MARKERS.get(name, "o")
             ax.plot(e.real, e.imag, marker, mfc="none", mec="k", ms=9)

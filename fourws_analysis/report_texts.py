@@ -193,7 +193,7 @@ def stability_notes(members: Sequence[RunAnalysis]) -> list[str]:
             details.append(f"8-DOF linearized: stable from {v.min():.3g} to {v.max():.3g} "
                            f"m/s (largest real part {np.nanmax(worst):+.3g} 1/s).")
     for name, system in first.models.items():
-        bad_e = _unstable(system.eigenvalues)
+        bad_e = _unstable(system.poles())
         if bad_e.size:
             label = MODEL_NAMES.get(name, name)
             unstable.append(f"{label} at {speed:.3g} m/s")
@@ -234,7 +234,7 @@ def identification_notes(runs: Sequence[RunAnalysis]) -> list[str]:
              "models leave out roll steer and load transfer altogether."]
     for r in with_modes:
         model = "8dof-lin" if "8dof-lin" in r.models else next(iter(r.models))
-        eig = np.asarray(r.models[model].eigenvalues, dtype=complex)
+        eig = r.models[model].poles()
         eig = eig[np.abs(eig) > 1e-6]
         slowest = eig[np.argsort(-eig.real)]
         n_show = r.modes.eigenvalues.size + 1  # one mode more than the fit has

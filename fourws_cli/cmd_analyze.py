@@ -118,7 +118,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _expected(metric: str, r: Any) -> bool:
     """Metrics a maneuver is not meant to give are not worth a warning line."""
-    return metric in ("frequency_response", "iso7401_step", "iso4138_steady_state")
+    return metric in ("frequency_response", "iso7401_step", "iso4138_steady_state",
+                      "iso3888_lane_change")
 
 
 def _print_summary(r: Any) -> None:
@@ -128,6 +129,6 @@ def _print_summary(r: Any) -> None:
     where = f", {speed:.1f} m/s" if speed else ""
     print(f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}{where}")
     for key in ("frequency_response", "iso7401_step", "iso4138_steady_state",
-                "identified_modes"):
+                "iso3888_lane_change", "identified_modes"):
         if key in metrics:
             print(f"  {key}: {json.dumps(metrics[key])[:300]}")

@@ -17,6 +17,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--repeats", type=int, default=5, help="repetitions (default 5)")
     parser.add_argument("--no-cold", action="store_true",
                         help="skip the empty-cache compile measurement (a subprocess)")
+    parser.add_argument("--study", action="store_true",
+                        help="benchmark studies instead: closed-loop vehicle-steps/s of the "
+                             "compiled loop, of whole points, of a study on 1 and 2 local "
+                             "workers and on Dask (fourws_study.bench)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -24,6 +28,17 @@ def run(args: argparse.Namespace) -> int:
     from fourws_cli._bounds import bounded
     from fourws_sim.bench import format_text, run_benchmark, to_json
     from fourws_sim.maneuvers import MAX_DURATION_S
+
+    if args.study:
+        import json
+
+        from fourws_study.bench import run_study_benchmark
+
+        repeats = int(bounded("--repeats", args.repeats, 1, 1000))
+        result = run_study_benchmark(repeats=repeats)
+        print(json.dumps(result, indent=2) if args.json else "\n".join(
+            f"{k}: {v}" for k, v in result.items()))
+        return 0
 
     seconds = bounded("--seconds", args.seconds, 0.0, MAX_DURATION_S, " s", low_open=True)
     bounded("--repeats", args.repeats, 1, 1000)

@@ -11,7 +11,8 @@ speed ``U`` (chapter 4 shows that constant gains can destabilize the vehicle):
 A law computes the gain vector :meth:`Law.gains` from its *belief* vehicle (which may differ
 from the simulated one, e.g. ``vehicle.with_axle_tires(0.6)``) and applies it to a
 :class:`LawInput`. Because every law has this form, :meth:`Law.linear_gains` can express it
-in the state/input order of any linear model, which lets the analysis close the loop exactly.
+in the state/input order of any linear model (or of the 8-DOF's linearization), which lets
+the analysis close the loop exactly.
 
 Signs follow ``docs/architecture.md``: positive steer angles turn left, ``r`` positive to the
 left, ``V`` positive to the left, roll positive right side down (the roll gains are expressed
@@ -34,6 +35,16 @@ A law runs in a sampled loop: its command is computed once per control period ``
 controller node pass the loop's period through :func:`fourws_control.registry.make_loop_law`).
 Laws designed in continuous time (closed forms of chapters 4 and 6) do not use it; a law
 designed for the sampled loop (``lqr``'s default design) does.
+
+Plain functions
+---------------
+The arithmetic of a law step is written once as plain functions of floats and arrays, in the
+subset of Python that numba compiles: each law's gain schedule (:class:`GainFunction`,
+:meth:`Law.gain_function`), the low-speed fade (:func:`gain_speed`), the sum of the gained
+signals (:func:`rear_angle_of`) and the actuator's limits (:func:`actuator_step`). The
+classes here call them; the study kernels (:mod:`fourws_study.kernel`) compile the same
+functions, so a compiled closed loop performs the same float operations in the same order as
+the interpreted one.
 """
 
 from __future__ import annotations
@@ -41,14 +52,14 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from enum import IntEnum
-from typing import Any, ClassVar, Mapping
+from typing import Any, Callable, ClassVar, Mapping
 
 import numpy as np
 
-from fourws_control._vehicle import bicycle
+from fourws_control.bicycle import bicycle
+from fourws_control.signals import Signal, signal_map
 from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError
-from fourws_sim.params import Vehicle
+from fourws_sim.params import Actuators, Vehicle
 
 #: Speed below which the gains fade linearly to zero at standstill, m/s. Parking-lot speeds
 #: (~7 km/h) keep full gains; walking pace and below fades out.
@@ -56,26 +67,6 @@ DEFAULT_MIN_SPEED_MPS = 2.0
 #: Control period a law is designed for when none is given, s: fourws' default 100 Hz loop
 #: (``control_period_s`` of ``config/scenarios/*.yaml`` and of the controller node).
 DEFAULT_CONTROL_PERIOD_S = 0.01
-
-
-class Signal(IntEnum):
-    """Signals a law may use; the order of :meth:`Law.gains`."""
-
-    DELTA_F = 0  #: front road-wheel angle delta_f, rad
-    YAW_RATE = 1  #: yaw rate r, rad/s
-    ROLL = 2  #: roll angle phi (right side down positive), rad
-    ROLL_RATE = 3  #: roll rate, rad/s
-    LATERAL_VELOCITY = 4  #: lateral velocity V of the CG in the body frame, m/s
-
-
-#: Unit of the gain on each signal (rear angle in rad per unit of the signal).
-GAIN_UNITS = {
-    Signal.DELTA_F: "rad/rad",
-    Signal.YAW_RATE: "rad/(rad/s)",
-    Signal.ROLL: "rad/rad",
-    Signal.ROLL_RATE: "rad/(rad/s)",
-    Signal.LATERAL_VELOCITY: "rad/(m/s)",
-}
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,7 +89,8 @@ class LinearGains:
     Attributes
     ----------
     model : str
-        Linear model name (``2dof``, ``2dof-free``, ``2dof-lagged``, ``3dof``).
+        Model name (``2dof``, ``2dof-free``, ``2dof-lagged``, ``3dof``, or ``8dof`` for its
+        linearization, :data:`fourws_control.signals.LINEARIZED_MODELS`).
     speed_mps : float
         Forward speed the gains belong to, m/s.
     K_x : numpy.ndarray
@@ -122,6 +114,66 @@ class LinearGains:
         return {"model": self.model, "speed_mps": self.speed_mps,
                 "K_x": dict(zip(self.state_names, map(float, self.K_x))),
                 "K_u": dict(zip(self.input_names, map(float, self.K_u)))}
+
+
+@dataclass(frozen=True)
+class GainFunction:
+    """A law's gain schedule as a plain function of the speed and a parameter vector.
+
+    ``function(speed_mps, params, out)`` writes the gains at ``speed_mps >= min_speed_mps``
+    (m/s) in :class:`Signal` order into ``out`` (length ``len(Signal)``, zeros on entry), from
+    the law's parameter vector ``params`` (float64). It uses only float arithmetic, indexing
+    and the functions of its own module, so numba compiles it to the same operations.
+
+    Attributes
+    ----------
+    function : callable
+        ``f(speed_mps, params, out) -> None``.
+    params : numpy.ndarray
+        The law's parameters (read only), in the order ``function`` reads them.
+    """
+
+    function: Callable[[float, np.ndarray, np.ndarray], None]
+    params: np.ndarray
+
+    def __post_init__(self) -> None:
+        params = np.array(self.params, dtype=np.float64).reshape(-1)
+        params.flags.writeable = False
+        object.__setattr__(self, "params", params)
+
+    def evaluate(self, speed_mps: float) -> np.ndarray:
+        """The gains at ``speed_mps`` (m/s), :class:`Signal` order."""
+        out = np.zeros(len(Signal))
+        self.function(speed_mps, self.params, out)
+        return out
+
+
+def gain_speed(speed_mps: float, min_speed_mps: float) -> tuple[float, float]:
+    """``(design speed, scale)``: a law's gains at ``speed_mps`` are its design gains at the
+    design speed times ``scale`` -- the speed itself and 1 at or above ``min_speed_mps``,
+    else ``min_speed_mps`` and ``max(U, 0) / min_speed_mps`` (the low-speed fade of the
+    module docstring). Speeds in m/s."""
+    if speed_mps >= min_speed_mps:
+        return speed_mps, 1.0
+    return min_speed_mps, max(speed_mps, 0.0) / min_speed_mps
+
+
+def rear_angle_of(k: Any, delta_f_rad: float, yaw_rate_radps: float, roll_rad: float,
+                  roll_rate_radps: float, lateral_velocity_mps: float) -> float:
+    """The rear road-wheel angle (rad) of gains ``k`` (:class:`Signal` order, units of
+    :data:`GAIN_UNITS`) and the signals they multiply (SI)."""
+    return (k[0] * delta_f_rad + k[1] * yaw_rate_radps + k[2] * roll_rad
+            + k[3] * roll_rate_radps + k[4] * lateral_velocity_mps)
+
+
+def actuator_step(angle_rad: float, command_rad: float, angle_limit_rad: float,
+                  max_step_rad: float) -> float:
+    """The rear actuator's angle after one period: from ``angle_rad`` toward ``command_rad``
+    clipped to ``+-angle_limit_rad``, by at most ``max_step_rad`` (the rate limit times the
+    period). Angles in rad."""
+    target = min(max(command_rad, -angle_limit_rad), angle_limit_rad)
+    step = min(max(target - angle_rad, -max_step_rad), max_step_rad)
+    return angle_rad + step
 
 
 def check_speed(speed_mps: float, field: str = "speed_mps") -> float:
@@ -186,11 +238,17 @@ class Law(ABC):
     def _design_gains(self, speed_mps: float) -> np.ndarray:
         """Gains in :class:`Signal` order at ``speed_mps >= min_speed_mps``."""
 
+    def gain_function(self) -> GainFunction | None:
+        """The law's gain schedule as a plain function (:class:`GainFunction`; its
+        ``evaluate`` is :meth:`_design_gains`), or None for a law that has none (it then only
+        runs interpreted)."""
+        return None
+
     def gains(self, speed_mps: float) -> np.ndarray:
         """Gain vector in :class:`Signal` order at forward speed ``speed_mps`` (m/s).
 
-        Units per :data:`GAIN_UNITS`. Below ``min_speed_mps`` the gains of ``min_speed_mps``
-        scaled by ``max(U, 0) / min_speed_mps``.
+        Units per :data:`fourws_control.signals.GAIN_UNITS`. Below ``min_speed_mps`` the gains
+        of ``min_speed_mps`` scaled by ``max(U, 0) / min_speed_mps``.
 
         Raises
         ------
@@ -200,10 +258,10 @@ class Law(ABC):
         u = float(speed_mps)
         if not math.isfinite(u):
             raise NonFiniteError(f"{self.name}: speed_mps must be finite, got {speed_mps!r}")
-        if u >= self.min_speed_mps:
-            k = self._design_gains(u)
-        else:
-            k = self._design_gains(self.min_speed_mps) * (max(u, 0.0) / self.min_speed_mps)
+        design_speed, scale = gain_speed(u, self.min_speed_mps)
+        k = self._design_gains(design_speed)
+        if scale != 1.0:
+            k = k * scale
         if not np.all(np.isfinite(k)):
             raise NonFiniteError(f"{self.name}: non-finite gains {k} at speed {u} m/s")
         return k
@@ -216,9 +274,8 @@ class Law(ABC):
     def rear_angle(self, inp: LawInput) -> float:
         """Rear road-wheel angle command in rad (before actuator limits)."""
         k = self.gains(inp.speed_mps)
-        out = (k[0] * inp.delta_f_rad + k[1] * inp.yaw_rate_radps + k[2] * inp.roll_rad
-               + k[3] * inp.roll_rate_radps + k[4] * inp.lateral_velocity_mps)
-        out = float(out)
+        out = float(rear_angle_of(k, inp.delta_f_rad, inp.yaw_rate_radps, inp.roll_rad,
+                                  inp.roll_rate_radps, inp.lateral_velocity_mps))
         if not math.isfinite(out):
             raise NonFiniteError(f"{self.name}: non-finite rear angle for input {inp}")
         return out
@@ -227,12 +284,14 @@ class Law(ABC):
 
     def linear_gains(self, model_name: str, vehicle: Vehicle | None = None,
                      speed_mps: float = 0.0) -> LinearGains:
-        """The law in a linear model's state/input order: ``delta_r = K_x x + K_u u``.
+        """The law in a model's state/input order: ``delta_r = K_x x + K_u u``.
 
         Parameters
         ----------
         model_name : str
-            ``2dof``, ``2dof-free``, ``2dof-lagged`` or ``3dof``.
+            ``2dof``, ``2dof-free``, ``2dof-lagged``, ``3dof`` (linear models), or ``8dof``
+            (the state and input order of its linearization; the law is linear, so its gains
+            are the same about any trim).
         vehicle : Vehicle, optional
             The model's (true) vehicle; only used to check that the model can be built.
         speed_mps : float
@@ -245,8 +304,6 @@ class Law(ABC):
         IncompatibleError
             The law uses a signal the model does not have (e.g. roll feedback on a 2-DOF).
         """
-        from fourws_control.signals import signal_map  # local: signals imports this module
-
         speed = check_speed(speed_mps)
         smap = signal_map(model_name)
         missing = [s for s in self.signals if s not in smap.available]
@@ -290,8 +347,6 @@ class RearSteerActuator:
     def __init__(self, vehicle: Vehicle | None = None, *, angle_limit_rad: float | None = None,
                  rate_limit_rad_per_s: float | None = None,
                  initial_angle_rad: float = 0.0) -> None:
-        from fourws_sim.params import Actuators
-
         act = vehicle.actuators if vehicle is not None else Actuators()
         self.angle_limit_rad = check_option(
             "angle_limit_rad",
@@ -326,8 +381,6 @@ class RearSteerActuator:
         if not math.isfinite(cmd):
             raise NonFiniteError(f"rear actuator: command must be finite, got {command_rad!r}")
         dt = check_option("dt_s", dt_s)
-        target = min(max(cmd, -self.angle_limit_rad), self.angle_limit_rad)
-        max_step = self.rate_limit_rad_per_s * dt
-        step = min(max(target - self.angle_rad, -max_step), max_step)
-        self.angle_rad += step
+        self.angle_rad = actuator_step(self.angle_rad, cmd, self.angle_limit_rad,
+                                       self.rate_limit_rad_per_s * dt)
         return self.angle_rad

@@ -33,7 +33,8 @@ import math
 
 import numpy as np
 
-from fourws_control.base import DEFAULT_CONTROL_PERIOD_S, DEFAULT_MIN_SPEED_MPS, Law, Signal
+from fourws_control.base import (DEFAULT_CONTROL_PERIOD_S, DEFAULT_MIN_SPEED_MPS,
+                                 GainFunction, Law, Signal)
 from fourws_sim.errors import ParameterError
 from fourws_sim.params import Vehicle
 
@@ -52,6 +53,22 @@ def zero_sideslip_yaw_gain(m: float, a: float, b: float, cf: float, cr: float, k
     L = a + b
     u2 = speed_mps * speed_mps
     return m * a / (L * cr) - b / u2 - ksf * (a / u2 + m * b / (L * cf))
+
+
+def zero_sideslip_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """The feed-forward ratio of eq. 4.13 at ``speed_mps`` (m/s) into ``out``
+    (:class:`~fourws_control.base.GainFunction`); ``params`` = ``m, a, b, Cf, Cr``."""
+    out[Signal.DELTA_F] = zero_sideslip_ratio(params[0], params[1], params[2], params[3],
+                                              params[4], speed_mps)
+
+
+def fixed_ratio_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """A constant ratio ``Ksf`` with the yaw-rate gain ``Kr U`` of eq. 4.14 into ``out``;
+    ``params`` = ``m, a, b, Cf, Cr, Ksf``."""
+    ksf = params[5]
+    out[Signal.DELTA_F] = ksf
+    out[Signal.YAW_RATE] = speed_mps * zero_sideslip_yaw_gain(
+        params[0], params[1], params[2], params[3], params[4], ksf, speed_mps)
 
 
 class FfZeroSideslipLaw(Law):
@@ -85,14 +102,15 @@ class FfZeroSideslipLaw(Law):
                 raise ParameterError("ksf", f"must be a finite number, got {ksf!r}")
             self.ksf = float(ksf)
             self.signals = (Signal.DELTA_F, Signal.YAW_RATE)
+        p = self.bicycle
+        self._gains = (GainFunction(zero_sideslip_gains, np.array([p.m, p.a, p.b, p.cf, p.cr]))
+                       if self.ksf is None else
+                       GainFunction(fixed_ratio_gains,
+                                    np.array([p.m, p.a, p.b, p.cf, p.cr, self.ksf])))
+
+    def gain_function(self) -> GainFunction:
+        """:func:`zero_sideslip_gains`, or :func:`fixed_ratio_gains` with option ``ksf``."""
+        return self._gains
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        p = self.bicycle
-        k = np.zeros(len(Signal))
-        if self.ksf is None:
-            k[Signal.DELTA_F] = zero_sideslip_ratio(p.m, p.a, p.b, p.cf, p.cr, speed_mps)
-        else:
-            k[Signal.DELTA_F] = self.ksf
-            k[Signal.YAW_RATE] = speed_mps * zero_sideslip_yaw_gain(
-                p.m, p.a, p.b, p.cf, p.cr, self.ksf, speed_mps)
-        return k
+        return self._gains.evaluate(speed_mps)

@@ -81,8 +81,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.linalg
 
-from fourws_control.base import (DEFAULT_CONTROL_PERIOD_S, DEFAULT_MIN_SPEED_MPS, Law, Signal,
-                                 check_option, check_speed)
+from fourws_control.base import (DEFAULT_CONTROL_PERIOD_S, DEFAULT_MIN_SPEED_MPS,
+                                 GainFunction, Law, Signal, check_option, check_speed)
 from fourws_control.signals import signal_map
 from fourws_sim.errors import IncompatibleError, NonFiniteError, ParameterError, UnknownNameError
 from fourws_sim.models import get_model
@@ -337,6 +337,24 @@ def lqr_gain(model_name: str, vehicle: Vehicle, speed_mps: float,
     return design_gain_matrix(A, B[:, [rear]], Q, R, design, control_period_s)[0]
 
 
+def table_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """Gains interpolated linearly in a speed table, held above it
+    (:class:`~fourws_control.base.GainFunction`): ``params`` = the ``n`` increasing grid
+    speeds (m/s), then the ``n x len(Signal)`` gain table row by row."""
+    n_sig = out.shape[0]
+    n = params.shape[0] // (1 + n_sig)
+    grid = params[:n]
+    if speed_mps >= grid[n - 1]:
+        for i in range(n_sig):
+            out[i] = params[n + (n - 1) * n_sig + i]
+        return
+    j = int(np.searchsorted(grid, speed_mps, side="right")) - 1
+    j = min(max(j, 0), n - 2)
+    w = (speed_mps - grid[j]) / (grid[j + 1] - grid[j])
+    for i in range(n_sig):
+        out[i] = (1.0 - w) * params[n + j * n_sig + i] + w * params[n + (j + 1) * n_sig + i]
+
+
 class LqrLaw(Law):
     """Gain-scheduled LQR rear steer (chapter 3), continuous or designed for the sampled loop.
 
@@ -408,14 +426,15 @@ class LqrLaw(Law):
                 table[i, sig] = -K[idx]
         self.gain_table = table
 
+        self._gains = GainFunction(table_gains, np.concatenate(
+            [self.speed_grid_mps, table.reshape(-1)]))
+
+    def gain_function(self) -> GainFunction:
+        """:func:`table_gains` of the designed schedule."""
+        return self._gains
+
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        grid, table = self.speed_grid_mps, self.gain_table
-        if speed_mps >= grid[-1]:
-            return table[-1].copy()
-        j = int(np.searchsorted(grid, speed_mps, side="right")) - 1
-        j = min(max(j, 0), len(grid) - 2)
-        w = (speed_mps - grid[j]) / (grid[j + 1] - grid[j])
-        return (1.0 - w) * table[j] + w * table[j + 1]
+        return self._gains.evaluate(speed_mps)
 
     def describe(self) -> dict[str, object]:
         """Name, belief vehicle, design model, design, period and weights."""

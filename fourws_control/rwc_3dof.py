@@ -52,8 +52,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fourws_control._vehicle import bicycle
-from fourws_control.base import Law, Signal
+from fourws_control.base import GainFunction, Law, Signal
+from fourws_control.bicycle import bicycle
 from fourws_sim.errors import IncompatibleError
 from fourws_sim.models import roll3dof
 from fourws_sim.params import GRAVITY_MPS2, Vehicle
@@ -96,15 +96,43 @@ def _coefficients(vehicle: Vehicle) -> tuple[float, float, float, float]:
     return p.a, p.b, p.m * p.b / (p.L * p.cf) - ef * pr, p.m * p.a / (p.L * p.cr) - er * pr
 
 
-def _gains(coef: tuple[float, float, float, float], speed_mps: float) -> tuple[float, float]:
-    a, b, front, rear = coef
+def rwc_gains_3dof(a: float, b: float, front: float, rear: float,
+                   speed_mps: float) -> tuple[float, float]:
+    """(Ksf1 in rad/rad, Kr1 in s/m) of RWC 1 and RWC 2 at ``speed_mps`` (m/s) from the
+    coefficients ``a, b, front, rear`` of the steady turn (module docstring)."""
     u2 = speed_mps * speed_mps
     return (-b + rear * u2) / (a + front * u2), rear - b / u2
 
 
 def zero_sideslip_gains_3dof(vehicle: Vehicle, speed_mps: float) -> tuple[float, float]:
     """(Ksf1 in rad/rad, Kr1 in s/m, applied as Kr1 U r) of RWC 1 and RWC 2 at ``speed_mps``."""
-    return _gains(_coefficients(vehicle), speed_mps)
+    return rwc_gains_3dof(*_coefficients(vehicle), speed_mps)
+
+
+def rwc1_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """RWC 1 at ``speed_mps`` (m/s) into ``out`` (:class:`~fourws_control.base.GainFunction`);
+    ``params`` = ``a, b, front, rear`` (:func:`rwc_gains_3dof`)."""
+    out[Signal.DELTA_F] = rwc_gains_3dof(params[0], params[1], params[2], params[3],
+                                         speed_mps)[0]
+
+
+def rwc2_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """RWC 2 (``Kr1 U`` on the yaw rate) at ``speed_mps`` (m/s) into ``out``; ``params`` as
+    :func:`rwc1_gains`."""
+    out[Signal.YAW_RATE] = rwc_gains_3dof(params[0], params[1], params[2], params[3],
+                                          speed_mps)[1] * speed_mps
+
+
+def rwc4_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """RWC 4 at ``speed_mps`` (m/s) into ``out``; ``params`` = ``Ksf4``, the rear-steer entry
+    ``B_V,delta_r`` of the V row, then ``c0, c1, c2`` of the V-row entries of ``r``, ``phi``
+    and ``phi_dot`` (each ``c0 + c1/U + c2 U``)."""
+    u = speed_mps
+    b_rear = params[1]
+    out[Signal.DELTA_F] = params[0]
+    out[Signal.YAW_RATE] = -(params[2] + params[3] / u + params[4] * u) / b_rear
+    out[Signal.ROLL] = -(params[5] + params[6] / u + params[7] * u) / b_rear
+    out[Signal.ROLL_RATE] = -(params[8] + params[9] / u + params[10] * u) / b_rear
 
 
 def sign_change_speed_mps(vehicle: Vehicle) -> float:
@@ -123,12 +151,15 @@ class Rwc1Law(Law):
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)
-        self._coef = _coefficients(belief_vehicle)  # fails here, not at 100 Hz
+        # fails here, not at 100 Hz
+        self._gains = GainFunction(rwc1_gains, np.array(_coefficients(belief_vehicle)))
+
+    def gain_function(self) -> GainFunction:
+        """:func:`rwc1_gains` of the belief vehicle."""
+        return self._gains
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        k = np.zeros(len(Signal))
-        k[Signal.DELTA_F] = _gains(self._coef, speed_mps)[0]
-        return k
+        return self._gains.evaluate(speed_mps)
 
 
 class Rwc2Law(Law):
@@ -140,12 +171,14 @@ class Rwc2Law(Law):
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)
-        self._coef = _coefficients(belief_vehicle)
+        self._gains = GainFunction(rwc2_gains, np.array(_coefficients(belief_vehicle)))
+
+    def gain_function(self) -> GainFunction:
+        """:func:`rwc2_gains` of the belief vehicle."""
+        return self._gains
 
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        k = np.zeros(len(Signal))
-        k[Signal.YAW_RATE] = _gains(self._coef, speed_mps)[1] * speed_mps
-        return k
+        return self._gains.evaluate(speed_mps)
 
 
 class Rwc4Law(Law):
@@ -178,17 +211,17 @@ class Rwc4Law(Law):
             raise IncompatibleError("rwc4_3dof: rear steer has no direct effect on dV/dt")
         self._b_rear = float(b_v[I.DELTA_R])
         self._ksf = -float(b_v[I.DELTA_F]) / self._b_rear
+        c = self._coef
+        self._gains = GainFunction(rwc4_gains, np.array(
+            [self._ksf, self._b_rear, *c[:, S.R], *c[:, S.PHI], *c[:, S.PHI_DOT]]))
 
     def _row(self, speed_mps: float) -> np.ndarray:
         c = self._coef
         return c[0] + c[1] / speed_mps + c[2] * speed_mps
 
+    def gain_function(self) -> GainFunction:
+        """:func:`rwc4_gains` of the belief vehicle."""
+        return self._gains
+
     def _design_gains(self, speed_mps: float) -> np.ndarray:
-        S = roll3dof.STATE
-        row = self._row(speed_mps)
-        k = np.zeros(len(Signal))
-        k[Signal.DELTA_F] = self._ksf
-        k[Signal.YAW_RATE] = -row[S.R] / self._b_rear
-        k[Signal.ROLL] = -row[S.PHI] / self._b_rear
-        k[Signal.ROLL_RATE] = -row[S.PHI_DOT] / self._b_rear
-        return k
+        return self._gains.evaluate(speed_mps)

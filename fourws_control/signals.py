@@ -1,20 +1,41 @@
-"""Where each law signal sits in a linear model's state/input vectors.
+"""The signals a law may use, and where each sits in a model's state/input vectors.
 
-A law is ``delta_r = sum_s k_s * signal_s`` (:class:`fourws_control.base.Signal`). To close a
-linear model analytically the signals are found among the model's ``STATE``/``INPUT`` members
-by name (models name their components, ``docs/architecture.md``). A model whose roll angle is
-defined opposite to fourws' right-side-down convention declares ``ROLL_SIGN = -1``; the map
-then flips the roll gains.
+A law is ``delta_r = sum_s k_s * signal_s`` (:class:`Signal`). To close a model with it
+analytically the signals are found among the model's ``STATE``/``INPUT`` members by name
+(models name their components, ``docs/architecture.md``): a linear model (``matrices``), or the
+8-DOF, linearized numerically about straight running by :mod:`fourws_analysis.linearize`. A
+model whose roll angle is defined opposite to fourws' right-side-down convention declares
+``ROLL_SIGN = -1``; the map then flips the roll gains.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import IntEnum
 from types import ModuleType
 
-from fourws_control.base import Signal
 from fourws_sim.errors import IncompatibleError
 from fourws_sim.models import get_model
+
+
+class Signal(IntEnum):
+    """Signals a law may use; the order of :meth:`fourws_control.base.Law.gains`."""
+
+    DELTA_F = 0  #: front road-wheel angle delta_f, rad
+    YAW_RATE = 1  #: yaw rate r, rad/s
+    ROLL = 2  #: roll angle phi (right side down positive), rad
+    ROLL_RATE = 3  #: roll rate, rad/s
+    LATERAL_VELOCITY = 4  #: lateral velocity V of the CG in the body frame, m/s
+
+
+#: Unit of the gain on each signal (rear angle in rad per unit of the signal).
+GAIN_UNITS = {
+    Signal.DELTA_F: "rad/rad",
+    Signal.YAW_RATE: "rad/(rad/s)",
+    Signal.ROLL: "rad/rad",
+    Signal.ROLL_RATE: "rad/(rad/s)",
+    Signal.LATERAL_VELOCITY: "rad/(m/s)",
+}
 
 #: Member names a model may use for each signal (first match wins).
 _NAMES: dict[Signal, tuple[str, ...]] = {
@@ -28,11 +49,14 @@ _NAMES: dict[Signal, tuple[str, ...]] = {
 REAR_INPUT = "DELTA_R"
 #: Linear models a law can be written for.
 LINEAR_MODELS = ("2dof", "2dof-free", "2dof-lagged", "3dof")
+#: Nonlinear models a law can be written for in the state order of their linearization
+#: (:func:`fourws_analysis.linearize.jacobians` about straight running).
+LINEARIZED_MODELS = ("8dof",)
 
 
 @dataclass(frozen=True)
 class SignalMap:
-    """Positions of the law signals in one linear model.
+    """Positions of the law signals in one model's state and input vectors.
 
     Attributes
     ----------
@@ -72,19 +96,21 @@ def _find(enum: type, names: tuple[str, ...]) -> int | None:
 
 
 def signal_map(model_name: str, module: ModuleType | None = None) -> SignalMap:
-    """Build the :class:`SignalMap` of linear model ``model_name``.
+    """Build the :class:`SignalMap` of model ``model_name``: a linear model (it has
+    ``matrices``) or one of :data:`LINEARIZED_MODELS`.
 
     Raises
     ------
     UnknownNameError
         Unknown model name.
     IncompatibleError
-        The model is not a linear model with a rear-steer input.
+        The model is neither linear nor linearized for the laws, or has no rear-steer input.
     """
     mod = module if module is not None else get_model(model_name)
-    if not hasattr(mod, "matrices"):
+    if not hasattr(mod, "matrices") and model_name not in LINEARIZED_MODELS:
         raise IncompatibleError(f"model {model_name!r} is not linear; linear models: "
-                                f"{', '.join(LINEAR_MODELS)}")
+                                f"{', '.join(LINEAR_MODELS)}; linearized: "
+                                f"{', '.join(LINEARIZED_MODELS)}")
     state, inp = mod.STATE, mod.INPUT
     rear = _find(inp, (REAR_INPUT,))
     if rear is None:

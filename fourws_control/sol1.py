@@ -19,7 +19,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from fourws_control.base import Law, Signal
+from fourws_control.base import GainFunction, Law, Signal
+from fourws_sim.params import Vehicle
+
+
+def sol1_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """Solution 1 at ``speed_mps`` (m/s) into ``out`` (:class:`~fourws_control.base.
+    GainFunction`); ``params`` = ``m, a, b, Cf, Cr`` (kg, m, m, N/rad, N/rad)."""
+    m, a, b, cf, cr = params[0], params[1], params[2], params[3], params[4]
+    u = speed_mps
+    out[Signal.DELTA_F] = -cf / cr
+    # Kr * U, the gain on r in s
+    out[Signal.YAW_RATE] = (m * u * u + a * cf - b * cr) / (cr * u)
 
 
 class Sol1Law(Law):
@@ -29,11 +40,14 @@ class Sol1Law(Law):
     summary = "chapter 4 Solution 1: Ksf = -Cf/Cr, Kr = (mU^2 + aCf - bCr)/(Cr U^2)"
     signals = (Signal.DELTA_F, Signal.YAW_RATE)
 
-    def _design_gains(self, speed_mps: float) -> np.ndarray:
+    def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
+        super().__init__(belief_vehicle, **options)
         p = self.bicycle
-        u = speed_mps
-        k = np.zeros(len(Signal))
-        k[Signal.DELTA_F] = -p.cf / p.cr
-        # Kr * U, the gain on r in s
-        k[Signal.YAW_RATE] = (p.m * u * u + p.a * p.cf - p.b * p.cr) / (p.cr * u)
-        return k
+        self._gains = GainFunction(sol1_gains, np.array([p.m, p.a, p.b, p.cf, p.cr]))
+
+    def gain_function(self) -> GainFunction:
+        """:func:`sol1_gains` of the belief vehicle."""
+        return self._gains
+
+    def _design_gains(self, speed_mps: float) -> np.ndarray:
+        return self._gains.evaluate(speed_mps)

@@ -17,7 +17,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from fourws_control.base import Law, Signal
+from fourws_control.base import GainFunction, Law, Signal
+from fourws_sim.params import Vehicle
+
+
+def sol2_gains(speed_mps: float, params: np.ndarray, out: np.ndarray) -> None:
+    """Solution 2 at ``speed_mps`` (m/s) into ``out`` (:class:`~fourws_control.base.
+    GainFunction`); ``params`` = ``a, b, Cf, Cr`` (m, m, N/rad, N/rad)."""
+    a, b, cf, cr = params[0], params[1], params[2], params[3]
+    out[Signal.DELTA_F] = a * cf / (b * cr)
+    out[Signal.YAW_RATE] = -(a * a * cf + b * b * cr) / (b * cr * speed_mps)
 
 
 class Sol2Law(Law):
@@ -27,9 +36,14 @@ class Sol2Law(Law):
     summary = "chapter 4 Solution 2: Ksf = aCf/(bCr), Kr = -(a^2 Cf + b^2 Cr)/(b Cr U^2)"
     signals = (Signal.DELTA_F, Signal.YAW_RATE)
 
-    def _design_gains(self, speed_mps: float) -> np.ndarray:
+    def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
+        super().__init__(belief_vehicle, **options)
         p = self.bicycle
-        k = np.zeros(len(Signal))
-        k[Signal.DELTA_F] = p.a * p.cf / (p.b * p.cr)
-        k[Signal.YAW_RATE] = -(p.a * p.a * p.cf + p.b * p.b * p.cr) / (p.b * p.cr * speed_mps)
-        return k
+        self._gains = GainFunction(sol2_gains, np.array([p.a, p.b, p.cf, p.cr]))
+
+    def gain_function(self) -> GainFunction:
+        """:func:`sol2_gains` of the belief vehicle."""
+        return self._gains
+
+    def _design_gains(self, speed_mps: float) -> np.ndarray:
+        return self._gains.evaluate(speed_mps)

@@ -44,8 +44,10 @@ Role = topics.Role
 NODE_NAMES = topics.NODE_NAMES
 #: Time allowed for every node to come up and discover the others, s.
 STARTUP_TIMEOUT_S = 60.0
-#: A run whose simulation time has not advanced for this long (wall) is stopped as stalled, s.
-STALL_TIMEOUT_S = 20.0
+#: A run whose simulation time has not advanced for this long (wall) is stopped as stalled, s
+#: (beyond the simulator's own 60 s wait for a lockstep answer, which names the silent node;
+#: this one catches a simulator that cannot report, e.g. a stopped one).
+STALL_TIMEOUT_S = 75.0
 #: After the simulation ended: how long (wall) the recorder may take to store everything and
 #: close the bag. A timeout fails the run; the bag is never closed short silently.
 RECORDER_GRACE_S = 90.0

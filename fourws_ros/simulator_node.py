@@ -27,9 +27,14 @@ Inputs that cannot be this run's answers -- another tick's or no tick's stamp, a
 answer, non-finite or impossible values, a command naming a state that was never published --
 are refused and counted by reason (``SimulatorStatus.rejected_*``). A command's age is the
 simulation time since the state it answers was published, from the node's own record, so no
-message can keep a dead controller's last command alive. Missing command: zero rear steer
-(counted, ``command_timed_out``). Missing driver input: lockstep waits (the status says for
-what); realtime stops the run after ``driver_timeout_s`` without one, naming the maneuver node.
+message can keep a dead controller's last command alive.
+
+Missing answers. Lockstep never runs a tick on anything but its answers, so a loaded machine
+cannot change the numbers: it waits (after 1 s a status says for what), and after
+``command_timeout_s`` of wall time (default 60 s) it stops the run as failed, naming the node
+that stopped answering. Realtime cannot wait: a missing command means zero rear steer (counted,
+``command_timed_out``), and ``driver_timeout_s`` of simulation time without a driver input
+stops the run, naming the maneuver node.
 
 End of a run
 ------------
@@ -66,9 +71,8 @@ from fourws_sim.errors import ParameterError, UnknownNameError
 CLOCK_MODES = ("lockstep", "realtime")
 #: Shortest/longest integration step a parameter may set, s.
 MIN_STEP_S, MAX_STEP_S = 1e-5, 0.1
-#: Lockstep: wall time to wait for the controller after it has missed a tick, s (a healthy
-#: controller answers within ~1 ms).
-LOST_WAIT_S = 0.02
+#: Period of the housekeeping timer (start, lockstep waits, the final status), s.
+HOUSEKEEPING_S = 0.01
 #: After the simulation ended: how long (wall) the final status waits for the recorder to
 #: hold everything the run sent, s.
 FINAL_WAIT_S = 10.0
@@ -101,7 +105,7 @@ class SimulatorNode(Node):
         self._lock = threading.Lock()
         self._rt_thread: threading.Thread | None = None
         self._reset_state()
-        self._timer = self.create_timer(LOST_WAIT_S / 2, self._housekeeping)
+        self._timer = self.create_timer(HOUSEKEEPING_S, self._housekeeping)
         self.get_logger().info(
             f"{self.model_name} on {self.vehicle.name}, {self.clock_mode}, dt "
             f"{self.dt_s} s, control {self.control_period_s} s"
@@ -140,10 +144,12 @@ class SimulatorNode(Node):
             description="lockstep | realtime", **ro))
         declare("initial_speed_mps", 23.611111111111111, ParameterDescriptor(
             description="forward speed at reset, m/s", floating_point_range=_frange(0.0, 100.0)))
-        declare("command_timeout_s", 1.0, ParameterDescriptor(
-            description="rear-steer command age (realtime: simulation time since the state "
-                        "it answers; lockstep: wall wait) after which rear steer falls back "
-                        "to zero, s", floating_point_range=_frange(1e-3, 60.0)))
+        declare("command_timeout_s", 60.0, ParameterDescriptor(
+            description="realtime: rear-steer command age (simulation time since the state "
+                        "it answers) after which rear steer falls back to zero; lockstep: "
+                        "wall time to wait for a tick's answers before the run stops as "
+                        "failed (lockstep never substitutes an input), s",
+            floating_point_range=_frange(1e-3, 3600.0)))
         declare("driver_timeout_s", 1.0, ParameterDescriptor(
             description="realtime: simulation time without a new driver input after which "
                         "the run stops (the maneuver node stopped answering), s",
@@ -390,17 +396,18 @@ class SimulatorNode(Node):
             self._start()
             return
         if self.clock_mode == "lockstep":
-            if self.answers.awaited is None or self.answers.driver is None:
-                self._report_long_wait()
-                return  # no tick sent, or the maneuver has not answered yet (it ends runs)
-            waited = time.monotonic() - self._await_since
-            # once the controller has missed a tick, the following ones wait only
-            # LOST_WAIT_S (a stopped controller must not cost a full timeout per tick; one
-            # that answers again within it is back in the loop)
-            limit = LOST_WAIT_S if self.command_timed_out else self._cfg["command_timeout_s"]
-            if waited > limit:
-                self._lockstep_advance()
             self._report_long_wait()
+            tick = self.answers.awaited
+            if tick is not None and time.monotonic() - self._await_since \
+                    > self._cfg["command_timeout_s"]:
+                # Lockstep never runs a tick on inputs other than the answers (a slow
+                # machine must not change the numbers): an answer this late means a node
+                # has stopped working, and the run stops, naming it.
+                missing = self.answers.waiting_for
+                self._end(f"no {missing} for the state at t = {tick.t:.2f} s within "
+                          f"{self._cfg['command_timeout_s']:g} s (wall time); "
+                          + ("the maneuver node" if "driver" in missing else
+                             "the controller node") + " stopped answering", failed=True)
 
     def _report_long_wait(self) -> None:
         """A tick (or a held tick) waiting over a second: publish a status saying for what,

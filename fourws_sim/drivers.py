@@ -173,6 +173,37 @@ class SpeedHoldSpec:
                                  source)
 
 
+def speed_hold_request(error_mps: float, integral_m: float, dt_s: float, kp_per_s: float,
+                       ki_per_s2: float, max_decel_mps2: float,
+                       max_accel_mps2: float) -> tuple[float, float]:
+    """One step of the speed-hold PI with conditional integration (module docstring).
+
+    Parameters
+    ----------
+    error_mps : float
+        Speed error ``U_target - U``, m/s.
+    integral_m : float
+        The integrated error so far, m.
+    dt_s : float
+        Time since the previous step, s.
+    kp_per_s, ki_per_s2, max_decel_mps2, max_accel_mps2 : float
+        :class:`SpeedHoldSpec` gains and limits.
+
+    Returns
+    -------
+    tuple of float
+        The acceleration request (m/s^2, within the limits) and the new integral (m): the
+        integral advances only while the request is within the limits.
+    """
+    integral = integral_m + error_mps * dt_s
+    request = kp_per_s * error_mps + ki_per_s2 * integral
+    if -max_decel_mps2 <= request <= max_accel_mps2:
+        return request, integral
+    # saturated: hold the integrator (conditional integration)
+    request = kp_per_s * error_mps + ki_per_s2 * integral_m
+    return min(max(request, -max_decel_mps2), max_accel_mps2), integral_m
+
+
 def split_brake_torque(total_nm: float, front_fraction: float
                        ) -> tuple[float, float, float, float]:
     """Split a total brake torque (N m, >= 0) over FL, FR, RL, RR by the front fraction."""
@@ -216,14 +247,10 @@ class SpeedHoldDriver:
         zeros = (0.0, 0.0, 0.0, 0.0)
         if not self.spec.enabled or self._radius_m <= 0.0:
             return zeros, zeros
-        error = target_mps - speed_mps
-        integral = self._integral_m + error * dt
-        request = self.spec.kp_per_s * error + self.spec.ki_per_s2 * integral
-        if -self.spec.max_decel_mps2 <= request <= self.spec.max_accel_mps2:
-            self._integral_m = integral
-        else:  # saturated: hold the integrator (conditional integration)
-            request = self.spec.kp_per_s * error + self.spec.ki_per_s2 * self._integral_m
-            request = min(max(request, -self.spec.max_decel_mps2), self.spec.max_accel_mps2)
+        spec = self.spec
+        request, self._integral_m = speed_hold_request(
+            target_mps - speed_mps, self._integral_m, dt, spec.kp_per_s, spec.ki_per_s2,
+            spec.max_decel_mps2, spec.max_accel_mps2)
         total_nm = self._mass_kg * self._radius_m * (request + self._rolling * GRAVITY_MPS2)
         if total_nm >= 0.0:
             wheels = _DRIVEN[self.spec.driven_axle]
@@ -565,6 +592,7 @@ def tracking_driver_spec_from(data: Any, source: str | None, prefix: str = "trac
 __all__ = [
     "CirclePath", "DriverCommand", "Path", "PathDriverSpec",
     "PathTrackingDriver", "PreviewPathDriver", "SplinePath", "SpeedHoldDriver", "SpeedHoldSpec",
-    "TrackingDriverSpec", "path_driver_spec_from", "speed_hold_spec_from", "split_brake_torque",
+    "TrackingDriverSpec", "path_driver_spec_from", "speed_hold_request", "speed_hold_spec_from",
+    "split_brake_torque",
     "tracking_driver_spec_from",
 ]

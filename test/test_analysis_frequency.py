@@ -7,12 +7,14 @@ import math
 from pathlib import Path
 from typing import Any
 
+import control
 import numpy as np
 import pytest
 from scipy import signal
 
 from fourws_analysis import bag as B
 from fourws_analysis import frequency as F
+from fourws_analysis import linear
 from fourws_analysis import units as U
 from fourws_sim.params import vehicle_from_mapping
 
@@ -56,14 +58,14 @@ def test_swept_sine_bag_matches_analytic_bode(tmp_path: Path) -> None:
               "model": "2dof", "speed_mps": SPEED}
     B.write_run(tmp_path / "sweep", t, state, config, model="2dof")
     uni = B.resample(B.load_bag(tmp_path / "sweep"))
-    model = F.linear_system(vehicle, "2dof", SPEED)
+    model = linear.linear_system(vehicle, "2dof", SPEED)
     for out in ("yaw_rate_radps", "lateral_accel_mps2", "sideslip_rad"):
         est = F.estimate_response(uni.channels["front_wheel_angle_rad"], uni.channels[out],
                                   uni.dt_s, method="transient", output=out)
         ok = est.trusted()
         f = est.freq_hz[ok]
         assert f.min() < 0.2 and f.max() > 3.0, (out, f.min(), f.max())
-        ref = model.response(out, f)
+        ref = F.model_response(model, out, f)
         err_db = np.abs(est.gain_db[ok] - ref.gain_db)
         err_deg = np.abs((est.phase_deg[ok] - ref.phase_deg + 180.0) % 360.0 - 180.0)
         assert err_db.max() < 0.5, (out, err_db.max())
@@ -75,12 +77,28 @@ def test_steady_state_gain_of_linear_system_is_textbook_yaw_gain() -> None:
     vehicle = vehicle_from_mapping(SET_1)
     L = vehicle.chassis.wheelbase_m
     expected = SPEED / (L + vehicle.understeer_gradient_rad_per_mps2 * SPEED ** 2)
-    got = F.linear_system(vehicle, "2dof", SPEED).dc_gain("yaw_rate_radps")
+    got = F.dc_gain(linear.linear_system(vehicle, "2dof", SPEED), "yaw_rate_radps")
     assert got == pytest.approx(expected, rel=1e-10)
     # a_y = U r at steady state
-    assert F.linear_system(vehicle, "2dof", SPEED).dc_gain("lateral_accel_mps2") == \
+    assert F.dc_gain(linear.linear_system(vehicle, "2dof", SPEED), "lateral_accel_mps2") == \
         pytest.approx(SPEED * expected, rel=1e-10)
 
+
+
+def test_dc_gain_of_a_singular_model_is_its_low_frequency_limit() -> None:
+    """A model with a mode the input reaches but no output sees (x1' = x2, like the 8-DOF's
+    heading) has a singular A: the DC gain is the limit of the response, here of
+    y/u = 1/(s + 2), 0.5 (within (2 pi DC_LIMIT_HZ / 2)^2 ~ 1e-11). A missing output is
+    named with the model's outputs."""
+    system = control.ss([[0.0, 1.0], [0.0, -2.0]], [[0.0], [1.0]], [[0.0, 1.0]], [[0.0]],
+                        inputs=[U.ROAD_WHEEL.channel], outputs=["yaw_rate_radps"],
+                        name="integrator and lag")
+    assert F.dc_gain(system, "yaw_rate_radps") == pytest.approx(0.5, rel=1e-10)
+    fr = F.model_response(system, "yaw_rate_radps", np.array([1.0]))
+    assert fr.response[0] == pytest.approx(1.0 / (2j * math.pi + 2.0), rel=1e-12)
+    assert fr.label == "integrator and lag" and fr.input == U.ROAD_WHEEL.channel
+    with pytest.raises(B.MetricUnavailableError, match="no output 'roll_rad'.*yaw_rate_radps"):
+        F.dc_gain(system, "roll_rad")
 
 def test_metrics_of_second_order_system() -> None:
     """Resonance, bandwidth and phase of wn^2/(s^2 + 2 zeta wn s + wn^2) match the analytic
@@ -154,11 +172,11 @@ def _shipped(name: str, **changes: Any) -> dict:
     return {**load_maneuver_spec(name).to_dict(), **changes}
 
 
-def _errors(est: F.FrequencyResponse, model: F.LinearSystem, mask: np.ndarray,
+def _errors(est: F.FrequencyResponse, model: control.StateSpace, mask: np.ndarray,
             scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Gain (dB) and phase (deg, wrapped to +-180) differences of ``est`` from the analytic
     response times ``scale`` at the points of ``mask``."""
-    ref = model.response(est.output, est.freq_hz[mask]).response * scale
+    ref = F.model_response(model, est.output, est.freq_hz[mask]).response * scale
     ratio = est.response[mask] / ref
     return 20.0 * np.log10(np.abs(ratio)), np.degrees(np.angle(ratio))
 
@@ -210,7 +228,7 @@ def test_random_steer_bag_welch_h1_within_random_error_of_analytic_bode(
     """
     path, speed = random_bag
     uni = B.resample(B.load_bag(path))
-    model = F.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
+    model = linear.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
     segment_s = 1.0 / 0.1  # estimate_response's default resolution, 0.1 Hz
     duration = uni.time_s[-1] - uni.time_s[0]
     n_d = int((duration - segment_s) // (segment_s / 2)) + 1
@@ -248,7 +266,7 @@ def test_pulse_bag_transient_estimate_matches_analytic_bode(
     """
     path, speed = pulse_bag
     uni = B.resample(B.load_bag(path))
-    model = F.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
+    model = linear.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
     for out in OUTPUTS_2DOF:
         est = F.estimate_response(uni.channels["front_wheel_angle_rad"], uni.channels[out],
                                   uni.dt_s, method="transient", output=out)
@@ -259,7 +277,7 @@ def test_pulse_bag_transient_estimate_matches_analytic_bode(
         err_db, err_deg = _errors(est, model, ok)
         assert np.abs(err_db).max() < 0.1, (out, np.abs(err_db).max())
         assert np.abs(err_deg).max() < 1.0, (out, np.abs(err_deg).max())
-        assert abs(est.response[0].real) == pytest.approx(abs(model.dc_gain(out)), rel=1e-3)
+        assert abs(est.response[0].real) == pytest.approx(abs(F.dc_gain(model, out)), rel=1e-3)
 
 
 @pytest.mark.parametrize("driver_topic", [True, False], ids=["driver_input", "ratio_only"])
@@ -282,7 +300,7 @@ def test_response_per_steering_wheel_angle_is_road_wheel_response_over_ratio(
     maneuver["amplitude_rad"] *= STEERING_RATIO  # the same 3 deg at the road wheels
     speed = _maneuver_bag(tmp_path / "pulse_sw", maneuver, vehicle_map, driver_topic)
     res = analyze_run(B.resample(B.load_bag(tmp_path / "pulse_sw")), eig_sweep=False)
-    model = F.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
+    model = linear.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
     ratio_db = 20.0 * math.log10(STEERING_RATIO)
     for out in OUTPUTS_2DOF:
         sw = res.frequency[f"{out}/steering_wheel_angle_rad"]
@@ -296,7 +314,7 @@ def test_response_per_steering_wheel_angle_is_road_wheel_response_over_ratio(
         assert np.abs(err_db).max() < 0.1, (out, np.abs(err_db).max())
         assert np.abs(err_deg).max() < 1.0, (out, np.abs(err_deg).max())
         gain = res.frequency_metrics[f"{out}/steering_wheel_angle_rad"].steady_state_gain
-        assert gain == pytest.approx(abs(model.dc_gain(out)) / STEERING_RATIO, rel=1e-3)
+        assert gain == pytest.approx(abs(F.dc_gain(model, out)) / STEERING_RATIO, rel=1e-3)
 
 
 def test_analyze_recognizes_random_and_pulse_runs(random_bag: tuple[Path, float],
@@ -320,7 +338,7 @@ def test_analyze_recognizes_random_and_pulse_runs(random_bag: tuple[Path, float]
                "--quiet"])
     assert rc == 0
     runs = json.loads(capsys.readouterr().out)["runs"]
-    model = F.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
+    model = linear.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
     pulse, random = runs["pulse"], runs["random_steer"]
     assert (pulse["maneuver"], random["maneuver"]) == ("pulse", "random_steer")
     uni = B.resample(B.load_bag(random_path))
@@ -329,7 +347,7 @@ def test_analyze_recognizes_random_and_pulse_runs(random_bag: tuple[Path, float]
         m = pulse["frequency_response"][key]
         assert m["trusted_band_hz"][0] == 0.0 and m["trusted_band_hz"][1] >= 3.5
         gain = m[U.gain_key(out, "front_wheel_angle_rad")]
-        assert gain == pytest.approx(abs(model.dc_gain(out)), rel=1e-3)
+        assert gain == pytest.approx(abs(F.dc_gain(model, out)), rel=1e-3)
         m = random["frequency_response"][key]
         assert m["trusted_band_hz"][0] == pytest.approx(0.1)
         assert m["trusted_band_hz"][1] >= 3.0
@@ -337,7 +355,7 @@ def test_analyze_recognizes_random_and_pulse_runs(random_bag: tuple[Path, float]
                                   uni.dt_s, method="welch", output=out)
         low = est.trusted() & np.isclose(est.freq_hz, 0.1)
         tol = 3.0 * float(_welch_random_error(est.coherence[low][0], 11))
-        ref = abs(model.response(out, np.array([0.1])).response[0])
+        ref = abs(F.model_response(model, out, np.array([0.1])).response[0])
         gain = m[U.gain_key(out, "front_wheel_angle_rad")]
         assert gain == pytest.approx(ref, rel=tol), (out, tol)
 
@@ -363,18 +381,18 @@ def test_single_period_sine_is_one_transient_matching_analytic_bode(
     assert rc == 0
     run = json.loads(capsys.readouterr().out)["runs"]["sine"]
     assert run["maneuver"] == "sine"
-    model = F.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
+    model = linear.linear_system(vehicle_from_mapping(SET_1), "2dof", speed)
     uni = B.resample(B.load_bag(path))
     for out in OUTPUTS_2DOF:
         met = run["frequency_response"][f"{out}/front_wheel_angle_rad"]
         band = met["trusted_band_hz"]
         assert band[0] <= 0.5 <= band[1], (out, band)
-        low = model.response(out, np.array([band[0]]))
+        low = F.model_response(model, out, np.array([band[0]]))
         assert band[0] == pytest.approx(1.0 / 6.0)
         gain = met[U.gain_key(out, "front_wheel_angle_rad")]
         assert gain == pytest.approx(low.gain[0], rel=0.012), out
         assert any("steady-state gain taken at" in n for n in met["notes"]), met["notes"]
-        lag = -model.response(out, np.array([1.0])).phase_deg[0]
+        lag = -F.model_response(model, out, np.array([1.0])).phase_deg[0]
         assert met["phase_lag_1hz_deg"] == pytest.approx(lag, abs=4.0), out
         est = F.estimate_response(uni.channels["front_wheel_angle_rad"], uni.channels[out],
                                   uni.dt_s, method="transient", output=out)

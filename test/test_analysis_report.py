@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from fourws_analysis import bag as B
+from fourws_analysis import frequency as F
 from fourws_analysis import report as R
 from fourws_analysis import report_figures as RF
 from fourws_analysis import report_texts as RT
@@ -117,7 +118,7 @@ def test_step_run_asked_for_frequency_metrics_gives_reason(tmp_path: Path) -> No
     assert "constant (no excitation band)" in why
     # the linear-model overlays still exist: DC yaw gain U/(L + K_us U^2)
     L = vehicle.chassis.wheelbase_m
-    assert res.models["2dof"].dc_gain("yaw_rate_radps") == pytest.approx(
+    assert F.dc_gain(res.models["2dof"], "yaw_rate_radps") == pytest.approx(
         SPEED / (L + vehicle.understeer_gradient_rad_per_mps2 * SPEED ** 2), rel=1e-9)
 
 
@@ -417,13 +418,13 @@ def test_eigenvalue_texts_comment_on_unstable_modes(engineer: dict) -> None:
     assert notes[0].startswith("Stable at 23.6 m/s; unstable at other speeds")
     speed = float(re.search(r"from ([0-9.]+) m/s", notes[0]).group(1))
     car = load_vehicle("table_8_1")
-    worst = [max(_lateral(eightdof_linear_system(car, v).eigenvalues).real)
+    worst = [max(_lateral(eightdof_linear_system(car, v).poles()).real)
              for v in (speed - 2.5, speed)]
     assert worst[0] < 0.0 < worst[1]
     sol2 = eightdof_linear_system(car, 60 / 3.6, "sol2")
     fake = RunAnalysis(run=fws[0].run, speed_mps=60 / 3.6, models={"8dof-lin": sol2})
     head = RT.stability_notes([fake])[0]
-    top = max(_lateral(sol2.eigenvalues).real)
+    top = max(_lateral(sol2.poles()).real)
     assert head.startswith("Unstable: 8-DOF linearized at 16.7 m/s") and top > 0.0
     assert f"{top:+.3g}" in " ".join(RT.stability_notes([fake]))
     ident = " ".join(RT.identification_notes(fws))
@@ -448,4 +449,4 @@ def test_analyze_draws_a_bode_plot_of_the_swept_sine_scenario(tmp_path: Path) ->
     model = eightdof_linear_system(load_vehicle("table_8_1"),
                                    data["maneuver"]["initial_speed_mps"])
     assert met[U.gain_key("yaw_rate_radps", "front_wheel_angle_rad")] == pytest.approx(
-        model.dc_gain("yaw_rate_radps"), rel=0.05)
+        F.dc_gain(model, "yaw_rate_radps"), rel=0.05)

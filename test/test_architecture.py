@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-CORE = ("fourws_sim", "fourws_control", "fourws_analysis")
+CORE = ("fourws_sim", "fourws_control", "fourws_analysis", "fourws_study")
 
 _BLOCKER = r"""
 import importlib.abc, sys

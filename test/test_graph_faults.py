@@ -114,15 +114,17 @@ def test_a_second_answering_publisher_fails_the_run_loudly(tmp_path, user_domain
     """A foreign node that answers every state with a plausible driver input and command: the
     run cannot tell whose answer came first, so it must not pass as ok; the reason names the
     second publisher."""
-    sc = _scenario(3.0)
-    rogue = _start_rogue("mimic", 30.0)
+    # 40 s of simulation, as above: the rogue must be discovered (and discover the run's
+    # state) before the run ends, whatever the load; a 3 s run could end first
+    sc = _scenario(40.0)
+    rogue = _start_rogue("mimic", 120.0)
     try:
         run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
                                   run_name="mimic")
     finally:
         os.killpg(rogue.pid, signal.SIGTERM)
-        _stop(rogue)
-    assert run.outcome == Outcome.FAILED
+        rogue_out = _stop(rogue)
+    assert run.outcome == Outcome.FAILED, rogue_out
     assert "second publisher" in run.reason
 
 

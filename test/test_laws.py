@@ -243,3 +243,35 @@ def test_call_path_equals_linear_gains_path(set1, name, options):
         inp = LawInput(delta_f_rad=delta_f, speed_mps=u, yaw_rate_radps=x[1], roll_rad=x[2],
                        roll_rate_radps=x[3], lateral_velocity_mps=x[0])
         assert law(inp) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("name", sorted(LAWS))
+def test_call_path_equals_linear_gains_path_on_the_8dof_states(name):
+    """The law written in the 8-DOF's state/input order (the order of its linearization,
+    fourws_analysis.compare.eightdof_linear_system) gives the 100 Hz path's rear angle for
+    any 8-DOF state and input; the states and inputs a law does not measure (speed, wheel
+    spin, position, heading, lagged loads and slips, drive and brake torques) get gain 0."""
+    from fourws_sim.models import eightdof as m8
+
+    car = load_vehicle("table_8_1")
+    law = make_law(name, car)
+    s, i = m8.STATE, m8.INPUT
+    rng = np.random.default_rng(11)
+    for u in (1.0, 23.0):
+        g = law.linear_gains("8dof", car, u)
+        assert g.state_names == tuple(s.__members__) and g.input_names == tuple(i.__members__)
+        x, w = rng.normal(size=len(s)), rng.normal(size=len(i))
+        w[i.DELTA_R] = 0.0
+        inp = LawInput(delta_f_rad=w[i.DELTA_F], speed_mps=u, yaw_rate_radps=x[s.R],
+                       roll_rad=x[s.PHI], roll_rate_radps=x[s.P], lateral_velocity_mps=x[s.V])
+        assert law(inp) == pytest.approx(g.K_x @ x + g.K_u @ w, rel=1e-12, abs=1e-15)
+        measured = {s.R, s.PHI, s.P, s.V}
+        assert not np.any(g.K_x[[j for j in range(len(s)) if j not in measured]])
+        assert not np.any(g.K_u[[j for j in range(len(i)) if j != i.DELTA_F]])
+
+
+def test_laws_are_written_only_for_linear_or_linearized_models(set1):
+    """A nonlinear model the analysis does not linearize for the laws (the cubic-tire 2-DOF
+    of chapter 7) is refused with the models that are."""
+    with pytest.raises(IncompatibleError, match="not linear.*2dof.*linearized: 8dof"):
+        make_law("sol1", set1).linear_gains("2dof-cubic", set1, 20.0)

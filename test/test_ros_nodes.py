@@ -321,30 +321,41 @@ def lockstep_sim(rclpy_context):
         peer.node.destroy_node()
 
 
-def test_simulator_rejects_bad_commands_and_times_out_to_zero(lockstep_sim):
+def test_simulator_refuses_bad_commands_and_never_substitutes_one(lockstep_sim):
+    """Lockstep: a non-finite and an out-of-limit command are refused and counted; the tick
+    waits for a valid answer and runs on it; an answer that never comes stops the run after
+    command_timeout_s (0.3 s here) naming the controller -- no tick ever runs on an input the
+    nodes did not send (zero rear steer would make the numbers depend on the machine's
+    load)."""
     sim, peer, executor = lockstep_sim
     assert _spin_until(executor, lambda: len(peer.states) == 1, 20.0)
     s0 = peer.states[0]
     assert s0.step == 0 and s0.sim_time_s == 0.0
-    # a non-finite and an out-of-limit command are ignored: the simulator keeps waiting
     peer.answer(s0, math.nan)
     peer.answer(s0, 10 * sim.limits.rear_angle_limit_rad)
-    t_sent = time.monotonic()
-    assert _spin_until(executor, lambda: len(peer.states) == 2, 10.0)
-    waited = time.monotonic() - t_sent
-    assert waited >= 0.3 - 0.05  # only the command timeout released the tick
-    assert sim.stale_commands == 1  # one timed-out tick
+    assert _spin_until(executor, lambda: sim.rejections.total == 3, 10.0)
     # (each answer() also sends a driver input: the second one for the same state is refused)
     assert sim.rejections.counts == {f"{topics.REAR_STEER_CMD}: impossible values": 2,
                                      f"{topics.DRIVER_INPUT}: second answer to one state": 1}
+    assert len(peer.states) == 1
+    cmd = topics.message_class(topics.REAR_STEER_CMD)()
+    cmd.angle_rad = 0.01
+    cmd.state_step = s0.step
+    cmd.state_stamp = s0.header.stamp
+    peer.cmd_pub.publish(cmd)
+    assert _spin_until(executor, lambda: len(peer.states) == 2, 10.0)
     s1 = peer.states[1]
-    assert s1.step == sim.n_control
-    # zero rear steer was applied over the period (8-DOF applied rear angle = command + roll
-    # steer; roll is ~0 after 10 ms of a small steer)
-    assert abs(s1.rear_wheel_angle_rad) < 1e-4
-    # a valid answer advances at once; nothing non-finite was ever published
-    peer.answer(s1, 0.01)
-    assert _spin_until(executor, lambda: len(peer.states) == 3, 10.0)
+    assert s1.step == sim.n_control and sim.stale_commands == 0
+    # the valid command was applied (8-DOF applied rear angle = command + roll steer; roll is
+    # ~0 after 10 ms of a small steer)
+    assert s1.rear_wheel_angle_rad == pytest.approx(0.01, abs=1e-4)
+    # no answer to the next state: the run stops, naming the controller, no third state
+    from fourws_sim.drivers import DriverCommand
+    peer.driver_pub.publish(conversions.driver_msg(DriverCommand(0.16, 0.01), s1.sim_time_s))
+    assert _spin_until(executor, lambda: bool(sim.ended), 10.0)
+    assert "no rear-steer command for the state at t = 0.01 s" in sim.stop_reason
+    assert "controller node stopped answering" in sim.stop_reason
+    assert len(peer.states) == 2
     for s in peer.states:
         assert math.isfinite(s.yaw_rate_radps) and math.isfinite(s.speed_mps)
 

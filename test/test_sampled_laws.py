@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from fourws_analysis.compare import eightdof_linear_system, eightdof_sampled_loop
+from fourws_analysis.frequency import dc_gain
 from fourws_control import Signal, available_laws, make_loop_law
 from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.maneuvers import load_maneuver_spec
@@ -67,8 +68,9 @@ def _iso7401_run(law: str) -> tuple:
     fws gets 3.5 m/s^2 from the linear estimate). Returns ``(result, amplitude, a_y)``."""
     car = load_vehicle(CAR)
     speed = _step(0.0).initial_speed_mps
-    gain = eightdof_linear_system(car, speed, law, None, {"control_period_s": PERIOD_S}) \
-        .dc_gain("lateral_accel_mps2")
+    gain = dc_gain(eightdof_linear_system(car, speed, law, None,
+                                          {"control_period_s": PERIOD_S}),
+                   "lateral_accel_mps2")
 
     def run(amplitude: float) -> tuple:
         res = run_closed_loop(car, _step(amplitude), law, control_period_s=PERIOD_S)
@@ -139,3 +141,49 @@ def test_lqr_settles_with_the_steer_held_at_100_and_50_hz(period_s: float) -> No
     assert _swing(res, 2.0) < 0.01
     assert np.max(np.abs(res.rear_law_rad)) < car.actuators.rear_angle_limit_rad
     np.testing.assert_allclose(res.rear_angle_rad, res.rear_law_rad, rtol=0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("law", available_laws())
+def test_eightdof_closed_loop_is_the_law_gains_on_the_linearization(law: str) -> None:
+    """The 8-DOF closed loop is the law's own gains on the linearized model: the expected
+    matrices are built here from the finite-difference Jacobians at straight running and
+    the law's gain vector in Signal order, each gain put on the 8-DOF state of the same
+    meaning (delta_r = k_delta delta_f + k_r R + k_phi PHI + k_p P + k_V V), the earth-frame
+    position left out (nothing depends on it: zero columns). eightdof_linear_system (A, B, the rear-command output)
+    and eightdof_sampled_loop (the zero-order-hold transition matrix) must equal them to the
+    last bit (the same floating-point operations), at a walking-pace-faded and two driving
+    speeds."""
+    import scipy.signal
+
+    from fourws_analysis.linearize import jacobians
+    from fourws_sim.models import eightdof as m8
+
+    car = load_vehicle(CAR)
+    s, i = m8.STATE, m8.INPUT
+    law_obj = make_loop_law(law, car, PERIOD_S)  # built once: lqr's design takes seconds
+    for speed in (1.5, 16.0, 30.0):
+        p = m8.params_for(car)
+        a, b = jacobians(m8.derivatives, m8.initial_state(p, speed), np.zeros(len(i)), p)
+        k = law_obj.gains(speed)
+        k_x = np.zeros(len(s))
+        k_x[s.R], k_x[s.PHI] = k[Signal.YAW_RATE], k[Signal.ROLL]
+        k_x[s.P], k_x[s.V] = k[Signal.ROLL_RATE], k[Signal.LATERAL_VELOCITY]
+        a_cl = a + np.outer(b[:, i.DELTA_R], k_x)
+        b_cl = b[:, i.DELTA_F] + b[:, i.DELTA_R] * k[Signal.DELTA_F]
+        keep = [j for j in range(len(s)) if j not in (s.X, s.Y)]
+        assert np.all(a_cl[:, [s.X, s.Y]] == 0.0)
+        assert np.all(np.any(a_cl[:, keep] != 0.0, axis=0))
+
+        system = eightdof_linear_system(car, speed, law_obj)
+        assert list(system.state_labels) == [s(j).name for j in keep]
+        np.testing.assert_array_equal(system.A, a_cl[np.ix_(keep, keep)])
+        np.testing.assert_array_equal(system.B[:, 0], b_cl[keep])
+        rear = system.find_output("rear_wheel_angle_rad")
+        np.testing.assert_array_equal(system.C[rear], k_x[keep])
+        assert system.D[rear, 0] == k[Signal.DELTA_F]
+
+        phi, gamma, *_ = scipy.signal.cont2discrete(
+            (a[np.ix_(keep, keep)], b[keep][:, [i.DELTA_R]], np.zeros((1, len(keep))),
+             np.zeros((1, 1))), PERIOD_S, method="zoh")
+        loop = eightdof_sampled_loop(car, speed, PERIOD_S, law_obj)
+        np.testing.assert_array_equal(loop.Phi, phi + gamma @ k_x[keep][None, :])

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from fourws_analysis import frequency as F
-from fourws_analysis import iso7401
+from fourws_analysis import iso7401, linear
 from fourws_run.closed_loop import run_scenario
 from fourws_run.step_target import (TARGET_ACCEL_RTOL, find_step_amplitude,
                                     resolve_maneuver_for_law, scenario_for_law)
@@ -90,10 +90,10 @@ def test_linear_2dof_amplitude_is_target_over_the_steady_state_gain(law: str) ->
     if law == "fws":
         gain = speed ** 2 / (car.chassis.wheelbase_m
                              + car.understeer_gradient_rad_per_mps2 * speed ** 2)
-        assert F.linear_system(car, "2dof", speed).dc_gain("lateral_accel_mps2") == \
+        assert F.dc_gain(linear.linear_system(car, "2dof", speed), "lateral_accel_mps2") == \
             pytest.approx(gain, rel=1e-9)
     else:
-        gain = F.linear_system(car, "2dof", speed, law).dc_gain("lateral_accel_mps2")
+        gain = F.dc_gain(linear.linear_system(car, "2dof", speed, law), "lateral_accel_mps2")
     spec = resolve_maneuver_for_law(scenario, law)
     assert spec.params.amplitude_rad == pytest.approx(TARGET / gain, rel=TARGET_ACCEL_RTOL)
 

@@ -1,4 +1,5 @@
-"""Small helpers shared by the law modules: the 2-DOF parameters of a belief vehicle."""
+"""The 2-DOF (bicycle) parameters of a vehicle, as the closed-form laws and the handling
+analysis use them."""
 
 from __future__ import annotations
 

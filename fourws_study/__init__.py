@@ -1,0 +1,1 @@
+"""fourws studies: sweeps and Monte Carlo over speed, laws and parameter error (no rclpy)."""

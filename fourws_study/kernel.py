@@ -1,0 +1,335 @@
+"""One closed-loop run of a study point: compiled where it can be, the interpreted twin
+otherwise, the same numbers either way.
+
+:func:`run_loop` runs a :class:`~fourws_run.config.RunConfig` and returns its
+:class:`LoopRecord` (one row per control tick: the ``VehicleState`` channels, the driver's
+commands, the law's command and the actuator's angle). It takes the compiled path
+(:mod:`fourws_study.loop_kernels`, one compiled call for the whole run) when the run is one
+the kernel performs exactly as :func:`fourws_run.closed_loop.run_closed_loop` does
+(:func:`compiled_plan` says why not otherwise):
+
+* the 8-DOF model with the RK4 integrator (the simulator's compiled path);
+* a maneuver whose steering is a function of time and whose driver only holds the initial
+  speed (:data:`TIME_STEERED`); the steering of every tick is taken from the maneuver itself
+  before the call;
+* a built-in law with a :class:`~fourws_control.base.GainFunction` the kernel knows
+  (:data:`fourws_study.loop_kernels.LAW_FUNCTIONS`: every law fourws ships);
+* a lockstep run.
+
+Everything else -- the path-following lane change, the ISO 4138 ramp that ends on a
+condition, braking in a turn, the linear models -- and every compiled run that meets what
+only the interpreted twin decides (a refused input, a failing law, a diverging state: the
+kernel stops with a code) runs through :func:`fourws_run.closed_loop.run_twin` itself.
+The compiled path is tested to give the twin's arrays bit for bit (``test/test_study.py``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass
+from types import ModuleType
+
+import numpy as np
+
+from fourws_control import Law, RearSteerActuator, make_loop_law
+from fourws_run.closed_loop import ClosedLoopResult, run_twin
+from fourws_run.config import RunConfig
+from fourws_run.ticks import InputLimits, whole_multiple
+from fourws_sim.maneuvers import Maneuver, make_maneuver
+
+#: Maneuver types whose steering depends on time only and whose driver holds the initial speed
+#: throughout (the compiled path takes them; the others need the interpreted twin).
+TIME_STEERED = ("step_steer", "ramp_steer", "sine", "swept_sine", "random_steer", "pulse")
+#: Wheels driven by the speed-hold driver for each ``speed_hold.driven_axle`` (FL, FR, RL, RR),
+#: as :class:`fourws_sim.drivers.SpeedHoldDriver` routes its torque.
+DRIVEN_WHEELS = {"front": (1.0, 1.0, 0.0, 0.0), "rear": (0.0, 0.0, 1.0, 1.0),
+                 "all": (1.0, 1.0, 1.0, 1.0)}
+#: What the twin says of a run it completed.
+DURATION = "duration"
+
+_LOADED: dict[str, ModuleType] = {}
+_REGISTERED = False
+#: Steering of each tick by maneuver definition (:func:`_steering`).
+_STEERING: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+_STEERING_CACHE_SIZE = 64
+
+
+def _register_plain_functions() -> None:
+    """Let numba compile the plain law, actuator and driver functions where the kernel calls
+    them (they stay ordinary Python functions for everyone else)."""
+    global _REGISTERED
+    if _REGISTERED:
+        return
+    from numba.extending import register_jitable
+
+    from fourws_control import base, ff_zero_sideslip, fws, lqr, rwc_3dof, sol1, sol2
+    from fourws_sim import drivers
+
+    for fn in (base.gain_speed, base.rear_angle_of, base.actuator_step, fws.fws_gains,
+               sol1.sol1_gains, sol2.sol2_gains, ff_zero_sideslip.zero_sideslip_ratio,
+               ff_zero_sideslip.zero_sideslip_yaw_gain, ff_zero_sideslip.zero_sideslip_gains,
+               ff_zero_sideslip.fixed_ratio_gains, rwc_3dof.rwc_gains_3dof,
+               rwc_3dof.rwc1_gains, rwc_3dof.rwc2_gains, rwc_3dof.rwc4_gains,
+               lqr.table_gains, drivers.speed_hold_request, drivers.split_brake_torque):
+        register_jitable(fn)
+    _REGISTERED = True
+
+
+def loop_kernel_for(tire_name: str) -> ModuleType:
+    """The :mod:`fourws_study.loop_kernels` variant of tire model ``tire_name`` (loaded once
+    per process under its own module name; compiled at its first call and cached on disk).
+
+    Raises
+    ------
+    UnknownNameError
+        Unknown tire model.
+    """
+    if tire_name not in _LOADED:
+        from fourws_sim.tires import get_tire
+        from fourws_study import loop_kernels
+
+        get_tire(tire_name)
+        _register_plain_functions()
+        name = f"{loop_kernels.__name__}_{tire_name}"
+        module = sys.modules.get(name)
+        if module is None:
+            spec = importlib.util.spec_from_file_location(name, loop_kernels.__file__)
+            assert spec is not None and spec.loader is not None
+            module = importlib.util.module_from_spec(spec)
+            module.TIRE_NAME = tire_name  # type: ignore[attr-defined]
+            sys.modules[name] = module
+            spec.loader.exec_module(module)
+        _LOADED[tire_name] = module
+    return _LOADED[tire_name]
+
+
+@dataclass
+class LoopRecord:
+    """The arrays of one closed-loop run, one row per control tick.
+
+    Attributes
+    ----------
+    time_s : numpy.ndarray
+        Tick times, s.
+    channels : dict of str to numpy.ndarray
+        :data:`fourws_study.loop_kernels.CHANNELS` (SI units): the ``VehicleState`` fields,
+        the driver's ``steering_wheel_angle_rad`` and ``front_wheel_angle_cmd_rad``, the
+        law's ``rear_law_rad``, the actuator's ``rear_command_rad`` and the summed drive and
+        brake torques.
+    end_reason : str
+        ``duration``, the maneuver's end or abort reason, or the divergence (the twin's
+        ``end_reason``).
+    engine : str
+        ``compiled`` or ``twin`` (``graph`` for a recorded run): which path computed it.
+    fallback : str
+        Why the twin ran ('' when the compiled path did).
+    final : dict of str to float or None
+        The state channels after the last tick (the state the simulator publishes last and
+        the maneuver answers as done; a bag holds it); None when the run diverged.
+    loop_seconds : float
+        Wall time of the compiled call alone, s (0 for the twin; ``fourws bench --study``).
+    """
+
+    time_s: np.ndarray
+    channels: dict[str, np.ndarray]
+    end_reason: str
+    engine: str
+    fallback: str = ""
+    final: dict[str, float] | None = None
+    loop_seconds: float = 0.0
+
+    @property
+    def diverged(self) -> bool:
+        """The simulation diverged (``end_reason`` says when)."""
+        return self.end_reason.startswith("the simulation diverged")
+
+
+def build_law(config: RunConfig) -> Law:
+    """The run's law as its controller builds it (:func:`fourws_control.make_loop_law` on the
+    belief vehicle for the controller's period)."""
+    return make_loop_law(config.law, config.belief, config.controller_period_s,
+                         config.law_options)
+
+
+def compiled_plan(config: RunConfig, law: Law | None = None) -> str:
+    """Why ``config`` cannot take the compiled path ('' if it can)."""
+    if not config.controller.builtin:
+        return "a user controller"
+    if config.model != "8dof" or config.integrator != "rk4":
+        return f"model {config.model} with {config.integrator} (compiled: 8dof with rk4)"
+    if not config.lockstep:
+        return "a realtime run"
+    if config.maneuver.type not in TIME_STEERED:
+        return f"maneuver type {config.maneuver.type} (its driver steers from the state)"
+    if law is not None:
+        from fourws_study.loop_kernels import LAW_FUNCTIONS
+
+        gains = law.gain_function()
+        if gains is None or not any(gains.function is f for f in LAW_FUNCTIONS):
+            return f"law {config.law} has no compiled gain function"
+    return ""
+
+
+def twin_record(result: ClosedLoopResult, fallback: str = "") -> LoopRecord:
+    """A :class:`LoopRecord` of the interpreted twin's result."""
+    from fourws_study.loop_kernels import CHANNELS
+
+    out = result.outputs
+    channels: dict[str, np.ndarray] = {}
+    for name in CHANNELS:
+        if name in out and out[name].ndim == 1:
+            channels[name] = out[name]
+    channels["steering_wheel_angle_rad"] = result.driver["steering_wheel_angle_rad"]
+    channels["front_wheel_angle_cmd_rad"] = result.driver["front_wheel_angle_rad"]
+    channels["rear_law_rad"] = result.rear_law_rad
+    channels["rear_command_rad"] = result.rear_angle_rad
+    drive, brake = result.driver["drive_torque_nm"], result.driver["brake_torque_nm"]
+    channels["drive_torque_total_nm"] = drive[:, 0] + drive[:, 1] + drive[:, 2] + drive[:, 3]
+    channels["brake_torque_total_nm"] = brake[:, 0] + brake[:, 1] + brake[:, 2] + brake[:, 3]
+    from fourws_study.loop_kernels import STATE_CHANNELS
+
+    final = None if result.diverged else {
+        name: float(result.final_outputs[name]) for name in STATE_CHANNELS}
+    return LoopRecord(result.time_s, channels, result.end_reason, "twin", fallback, final)
+
+
+def run_interpreted(config: RunConfig, fallback: str = "") -> LoopRecord:
+    """Run ``config`` with the interpreted twin (:func:`fourws_run.closed_loop.run_twin`)."""
+    return twin_record(run_twin(config), fallback)
+
+
+def _steering(man: Maneuver, speed: float, dt: float,
+              n_step: int) -> tuple[np.ndarray, np.ndarray] | str:
+    """The steering-wheel and front road-wheel angle the maneuver commands at each tick the
+    twin runs (ticks ``t_k = k n dt`` until the maneuver is done), or why there are none.
+
+    Computed by the maneuver itself (``command`` at each tick; for the
+    :data:`TIME_STEERED` types the steering depends on the time only) and kept per maneuver
+    definition without its speed and speed hold, which the steering does not read.
+    """
+    spec = man.spec.to_dict()
+    for key in ("initial_speed_mps", "speed_hold", "name", "description"):
+        spec.pop(key, None)
+    ratio = man.vehicle.steering.ratio if man.vehicle.steering is not None else None
+    key = json.dumps([spec, ratio, dt, n_step], sort_keys=True, default=str)
+    if key in _STEERING:
+        return _STEERING[key]
+    period = n_step * dt
+    limit = int(math.ceil(man.duration_s / period)) + 1
+    hand, front = [], []
+    probe = {"speed_mps": speed}
+    for k in range(limit):
+        t = (k * n_step) * dt
+        if man.done(t, None):
+            break
+        cmd = man.command(t, probe)
+        hand.append(cmd.steering_wheel_angle_rad)
+        front.append(cmd.front_wheel_angle_rad)
+    else:
+        return "the maneuver does not end within its duration"
+    if not front:
+        return "the maneuver ends before its first tick"
+    result = (np.array(hand, dtype=np.float64), np.array(front, dtype=np.float64))
+    for arr in result:
+        arr.flags.writeable = False
+    if len(_STEERING) >= _STEERING_CACHE_SIZE:
+        _STEERING.pop(next(iter(_STEERING)))
+    _STEERING[key] = result
+    return result
+
+
+def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
+    """Run ``config`` in one compiled call; the :class:`LoopRecord`, or why the twin must run
+    it (a string).
+
+    Parameters
+    ----------
+    config : RunConfig
+        A run :func:`compiled_plan` accepts.
+    law : Law
+        The run's law (:func:`build_law`; shared by the points of one belief).
+    """
+    from fourws_sim.models import eightdof
+
+    why = compiled_plan(config, law)
+    if why:
+        return why
+    vehicle = config.vehicle
+    dt = config.integration_step_s
+    period = config.controller_period_s
+    n_step = whole_multiple(period, dt, "control_period_s")
+    # the simulator's construction and reset (Simulator.__init__/reset)
+    p = eightdof.params_for(vehicle, config.tire)
+    eightdof.check_step(p, dt, config.integrator, vehicle.source or vehicle.name)
+    speed = config.maneuver.initial_speed_mps
+    x = eightdof.initial_state(p, float(speed))
+    man = make_maneuver(config.maneuver, vehicle)
+    steering = _steering(man, float(speed), dt, n_step)
+    if isinstance(steering, str):
+        return steering
+    hand_a, front_a = steering
+    limits = InputLimits.for_vehicle(vehicle)
+    if not (np.all(np.abs(front_a) <= limits.front_angle_limit_rad)
+            and np.all(np.abs(hand_a) <= limits.steering_wheel_limit_rad)):
+        return "a steering input the simulator refuses"
+    # the speed-hold driver and the actuator (SpeedHoldDriver, RearSteerActuator)
+    sh = config.maneuver.speed_hold
+    module = loop_kernel_for(p.tire_name)
+    drv = np.zeros(module.N_DRIVER)
+    drv[module.D_ENABLED] = 1.0 if sh.enabled else 0.0
+    drv[module.D_KP], drv[module.D_KI] = sh.kp_per_s, sh.ki_per_s2
+    drv[module.D_MAX_DECEL], drv[module.D_MAX_ACCEL] = sh.max_decel_mps2, sh.max_accel_mps2
+    drv[module.D_MASS] = vehicle.chassis.mass_kg
+    drv[module.D_RADIUS] = vehicle.body.wheel_radius_m if vehicle.body is not None else 0.0
+    drv[module.D_ROLLING] = (vehicle.tire.rolling_resistance if vehicle.tire is not None
+                             else 0.0)
+    drv[module.D_BRAKE_FRONT] = sh.brake_front_fraction
+    driven = DRIVEN_WHEELS[sh.driven_axle]
+    drv[module.D_N_DRIVEN] = float(sum(1 for w in driven if w))
+    drv[module.D_DRIVEN_FL:module.D_DRIVEN_FL + 4] = driven
+    drv[module.D_TARGET] = speed
+    drv[module.D_TORQUE_LIMIT] = limits.torque_limit_nm
+    drv[module.D_REAR_LIMIT] = limits.rear_angle_limit_rad
+    actuator = RearSteerActuator(config.belief)
+    gains = law.gain_function()
+    assert gains is not None
+    kind = next(i for i, f in enumerate(module.LAW_FUNCTIONS) if gains.function is f)
+    out = np.zeros((front_a.size + 1, module.N_CHANNELS))
+    t0 = time.perf_counter()
+    code, ticks = module.closed_loop(
+        x, p.arr, p.coeffs_front, p.coeffs_rear, float(dt), int(n_step), hand_a, front_a,
+        drv, int(kind), np.ascontiguousarray(gains.params), float(law.min_speed_mps),
+        float(actuator.angle_limit_rad), float(actuator.rate_limit_rad_per_s * float(period)),
+        out)
+    loop_seconds = time.perf_counter() - t0
+    if code != module.DONE:
+        return {module.DIVERGED: "the simulation diverged",
+                module.DRIVER_REFUSED: "a driver input the simulator refuses",
+                module.LAW_FAILED: "the law failed",
+                module.COMMAND_REFUSED: "a rear command the simulator refuses"}[int(code)]
+    channels = {name: out[:-1, i].copy() for i, name in enumerate(module.CHANNELS)}
+    final = {name: float(out[-1, i]) for i, name in enumerate(module.CHANNELS)
+             if name in module.STATE_CHANNELS}
+    return LoopRecord(channels["sim_time_s"], channels, man.abort_reason or DURATION,
+                      "compiled", final=final, loop_seconds=loop_seconds)
+
+
+def run_loop(config: RunConfig, law: Law | None = None, compiled: bool = True) -> LoopRecord:
+    """The closed-loop run of ``config``: compiled where :func:`compiled_plan` allows (and
+    ``compiled``), else, or when the compiled run stops on something only the twin decides,
+    the interpreted twin."""
+    if compiled:
+        law = law if law is not None else build_law(config)
+        result = run_compiled(config, law)
+        if isinstance(result, LoopRecord):
+            return result
+        return run_interpreted(config, fallback=result)
+    return run_interpreted(config, fallback="compiled path not asked for")
+
+
+__all__ = ["DRIVEN_WHEELS", "LoopRecord", "TIME_STEERED", "build_law", "compiled_plan",
+           "loop_kernel_for", "run_compiled", "run_interpreted", "run_loop", "twin_record"]

@@ -1,0 +1,307 @@
+"""Numba kernel of one whole closed-loop run of the offline twin, for one tire model.
+
+Do not import this module directly: :func:`fourws_study.kernel.loop_kernel_for` loads it once
+per tire model under its own module name with ``TIRE_NAME`` set (as
+:func:`fourws_sim.models.eightdof.kernels_for` loads the 8-DOF kernels), so each tire variant
+calls that tire's compiled RK4 loop and right-hand side and numba's disk cache keeps one entry
+per variant.
+
+:func:`closed_loop` runs every control tick of :func:`fourws_run.closed_loop.run_closed_loop`
+in one compiled call, for the maneuvers whose steering is a function of time and whose driver
+only holds the speed: the tick's outputs (the 8-DOF right-hand side with the held input, as
+``Simulator.outputs``), the speed-hold driver (:func:`fourws_sim.drivers.speed_hold_request`,
+:func:`~fourws_sim.drivers.split_brake_torque`), the law (its
+:class:`~fourws_control.base.GainFunction`, :func:`~fourws_control.base.gain_speed`,
+:func:`~fourws_control.base.rear_angle_of`), the actuator
+(:func:`~fourws_control.base.actuator_step`) and one control period of the compiled RK4 loop
+(:attr:`fourws_sim.models.eightdof.Kernels.rk4`). Those functions are the ones the
+interpreted twin calls (registered with numba by :mod:`fourws_study.kernel`), so the kernel
+performs the twin's float operations in the twin's order; the steering angles of each tick
+are the maneuver's own, computed before the call. What only the interpreted twin decides --
+a refused input, a law that fails, a diverging state -- ends the kernel with a code, and
+the point is run again by the twin, which says why.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import types
+from pathlib import Path
+from typing import Any
+
+import numba
+import numpy as np
+
+from fourws_control.base import actuator_step, gain_speed, rear_angle_of
+from fourws_control.ff_zero_sideslip import fixed_ratio_gains, zero_sideslip_gains
+from fourws_control.fws import fws_gains
+from fourws_control.lqr import table_gains
+from fourws_control.rwc_3dof import rwc1_gains, rwc2_gains, rwc4_gains
+from fourws_control.sol1 import sol1_gains
+from fourws_control.sol2 import sol2_gains
+from fourws_sim.drivers import speed_hold_request, split_brake_torque
+from fourws_sim.models.eightdof import (INPUT, N_AUX, N_INPUT, N_STATE, STATE, aux_from_array,
+                                        kernels_for)
+from fourws_sim.params import GRAVITY_MPS2
+
+#: Tire model of this variant (set by ``loop_kernel_for`` before the module body runs).
+TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
+_KERNELS = kernels_for(TIRE_NAME)
+_rk4 = _KERNELS.rk4
+_rhs = _KERNELS.rhs
+
+#: Recorded channels, one column each of the kernel's output (SI units; the names of
+#: ``VehicleState`` and of :class:`fourws_analysis.bag.UniformRun`).
+CHANNELS = ("sim_time_s", "x_m", "y_m", "heading_rad", "speed_mps", "lateral_velocity_mps",
+            "yaw_rate_radps", "roll_rad", "roll_rate_radps", "sideslip_rad",
+            "longitudinal_accel_mps2", "lateral_accel_mps2", "front_wheel_angle_rad",
+            "rear_wheel_angle_rad", "steering_wheel_angle_rad", "front_wheel_angle_cmd_rad",
+            "rear_law_rad", "rear_command_rad", "drive_torque_total_nm",
+            "brake_torque_total_nm")
+N_CHANNELS = len(CHANNELS)
+(C_T, C_X, C_Y, C_PSI, C_U, C_V, C_R, C_PHI, C_P, C_BETA, C_AX, C_AY, C_DF, C_DR, C_HAND,
+ C_FRONT, C_LAW, C_REAR, C_DRIVE, C_BRAKE) = range(N_CHANNELS)
+#: The channels of the vehicle state (the rest are the answers to it).
+STATE_CHANNELS = CHANNELS[:C_HAND]
+
+#: Law kinds: the position of the law's gain function in this tuple.
+LAW_FUNCTIONS = (fws_gains, sol1_gains, sol2_gains, zero_sideslip_gains, fixed_ratio_gains,
+                 rwc1_gains, rwc2_gains, rwc4_gains, table_gains)
+
+#: Slots of the driver parameter vector ``drv``.
+(D_ENABLED, D_KP, D_KI, D_MAX_DECEL, D_MAX_ACCEL, D_MASS, D_RADIUS, D_ROLLING, D_BRAKE_FRONT,
+ D_N_DRIVEN, D_DRIVEN_FL, D_DRIVEN_FR, D_DRIVEN_RL, D_DRIVEN_RR, D_TARGET, D_TORQUE_LIMIT,
+ D_REAR_LIMIT) = range(17)
+N_DRIVER = D_REAR_LIMIT + 1
+
+#: Exit codes: every tick run, or where the interpreted twin must take over.
+DONE, DIVERGED, DRIVER_REFUSED, LAW_FAILED, COMMAND_REFUSED = range(5)
+
+i_u, i_v, i_r, i_phi, i_p = (int(STATE.U), int(STATE.V), int(STATE.R), int(STATE.PHI),
+                             int(STATE.P))
+i_x, i_y, i_psi = int(STATE.X), int(STATE.Y), int(STATE.PSI)
+j_df, j_dr, j_st = int(INPUT.DELTA_F), int(INPUT.DELTA_R), int(INPUT.STEER_TORQUE)
+j_d0, j_b0 = int(INPUT.DRIVE_FL), int(INPUT.BRAKE_FL)
+# slots of the right-hand side's auxiliary array, read through its public unpacker
+_SLOTS = aux_from_array(np.arange(N_AUX, dtype=np.float64))
+a_df, a_dr = int(_SLOTS.delta_f_rad), int(_SLOTS.delta_r_rad)
+a_ax, a_ay = int(_SLOTS.ax_mps2), int(_SLOTS.ay_mps2)
+G = float(GRAVITY_MPS2)
+
+
+def _gains(kind, speed, params, out):  # type: ignore[no-untyped-def]
+    """The law's design gains at ``speed`` into ``out`` (zeroed first)."""
+    for i in range(out.shape[0]):
+        out[i] = 0.0
+    if kind == 0:
+        fws_gains(speed, params, out)
+    elif kind == 1:
+        sol1_gains(speed, params, out)
+    elif kind == 2:
+        sol2_gains(speed, params, out)
+    elif kind == 3:
+        zero_sideslip_gains(speed, params, out)
+    elif kind == 4:
+        fixed_ratio_gains(speed, params, out)
+    elif kind == 5:
+        rwc1_gains(speed, params, out)
+    elif kind == 6:
+        rwc2_gains(speed, params, out)
+    elif kind == 7:
+        rwc4_gains(speed, params, out)
+    else:
+        table_gains(speed, params, out)
+
+
+def _outputs(x, u, q, cf, cr, dx, aux, t, row):  # type: ignore[no-untyped-def]
+    """The state channels of ``row`` at time ``t``: ``Simulator.outputs()`` of state ``x``
+    with the held input ``u`` (accelerations and applied road-wheel angles from the
+    right-hand side)."""
+    _rhs(x, u, q, cf, cr, dx, aux)
+    U = x[i_u]
+    V = x[i_v]
+    row[C_T] = t
+    row[C_X] = x[i_x]
+    row[C_Y] = x[i_y]
+    row[C_PSI] = x[i_psi]
+    row[C_U] = U
+    row[C_V] = V
+    row[C_R] = x[i_r]
+    row[C_PHI] = x[i_phi]
+    row[C_P] = x[i_p]
+    row[C_BETA] = math.atan2(V, U) if (U != 0.0 or V != 0.0) else 0.0
+    row[C_AX] = aux[a_ax]
+    row[C_AY] = aux[a_ay]
+    row[C_DF] = aux[a_df]
+    row[C_DR] = aux[a_dr]
+
+
+def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-untyped-def]
+                law_kind, law_params, min_speed, angle_limit, max_step, out):
+    """Run ``out.shape[0]`` control ticks from state ``x`` (modified in place).
+
+    Parameters
+    ----------
+    x : float64 array
+        8-DOF state at tick 0 (``eightdof.initial_state``).
+    q, cf, cr : float64 arrays
+        Packed 8-DOF parameters and the front and rear tire coefficients.
+    dt : float
+        Integration step, s.
+    n_step : int
+        Integration steps per control period.
+    hand, front : float64 arrays
+        The maneuver's steering-wheel and front road-wheel angle of each tick, rad.
+    drv : float64 array
+        Speed-hold driver and input limits (slots ``D_*``).
+    law_kind : int
+        Index of the law's gain function in :data:`LAW_FUNCTIONS`.
+    law_params : float64 array
+        The law's :class:`~fourws_control.base.GainFunction` parameters.
+    min_speed, angle_limit, max_step : float
+        The law's fade speed (m/s), the actuator's angle limit (rad) and largest move per
+        control period (rad).
+    out : float64 array (n_ticks + 1, N_CHANNELS)
+        Filled tick by tick with :data:`CHANNELS`; the last row holds the state after the
+        last tick (its command columns NaN).
+
+    Returns
+    -------
+    (int, int)
+        Exit code (``DONE`` or why the twin must take over) and the ticks recorded.
+    """
+    n_ticks = out.shape[0] - 1
+    u = np.zeros(N_INPUT)
+    dx = np.zeros(N_STATE)
+    aux = np.zeros(N_AUX)
+    k_gain = np.zeros(5)
+    drive = np.zeros(4)
+    brake = np.zeros(4)
+    integral = 0.0
+    t_prev = 0.0
+    angle = 0.0
+    enabled = drv[D_ENABLED] != 0.0 and drv[D_RADIUS] > 0.0
+    torque_limit = drv[D_TORQUE_LIMIT]
+    for k in range(n_ticks):
+        # the tick's outputs: Simulator.outputs() with the input held since the last step
+        t = (k * n_step) * dt
+        row = out[k]
+        _outputs(x, u, q, cf, cr, dx, aux, t, row)
+        U = x[i_u]
+        V = x[i_v]
+        r = x[i_r]
+        phi = x[i_phi]
+        p = x[i_p]
+        # the maneuver node's answer: its steering, and the speed-hold driver
+        d_f = front[k]
+        for i in range(4):
+            drive[i] = 0.0
+            brake[i] = 0.0
+        if enabled:
+            dt_drv = 0.0 if k == 0 else max(t - t_prev, 0.0)
+            request, integral = speed_hold_request(
+                drv[D_TARGET] - U, integral, dt_drv, drv[D_KP], drv[D_KI], drv[D_MAX_DECEL],
+                drv[D_MAX_ACCEL])
+            total = drv[D_MASS] * drv[D_RADIUS] * (request + drv[D_ROLLING] * G)
+            if total >= 0.0:
+                share = total / drv[D_N_DRIVEN]
+                for i in range(4):
+                    if drv[D_DRIVEN_FL + i] != 0.0:
+                        drive[i] = share
+            else:
+                bfl, bfr, brl, brr = split_brake_torque(-total, drv[D_BRAKE_FRONT])
+                brake[0] = bfl
+                brake[1] = bfr
+                brake[2] = brl
+                brake[3] = brr
+        t_prev = t
+        for i in range(4):
+            if not (abs(drive[i]) <= torque_limit and abs(brake[i]) <= torque_limit):
+                return DRIVER_REFUSED, k
+        # the controller node's answer: the law through the actuator
+        speed, scale = gain_speed(U, min_speed)
+        _gains(law_kind, speed, law_params, k_gain)
+        if scale != 1.0:
+            for i in range(5):
+                k_gain[i] = k_gain[i] * scale
+        for i in range(5):
+            if not math.isfinite(k_gain[i]):
+                return LAW_FAILED, k
+        c = rear_angle_of(k_gain, d_f, r, phi, p, V)
+        if not math.isfinite(c):
+            return LAW_FAILED, k
+        angle = actuator_step(angle, c, angle_limit, max_step)
+        if abs(angle) > drv[D_REAR_LIMIT] * (1.0 + 1e-12):
+            return COMMAND_REFUSED, k
+        row[C_HAND] = hand[k]
+        row[C_FRONT] = d_f
+        row[C_LAW] = c
+        row[C_REAR] = angle
+        row[C_DRIVE] = drive[0] + drive[1] + drive[2] + drive[3]
+        row[C_BRAKE] = brake[0] + brake[1] + brake[2] + brake[3]
+        # the simulator integrates one control period holding both answers
+        u[j_df] = d_f
+        u[j_dr] = angle
+        u[j_st] = 0.0
+        for i in range(4):
+            u[j_d0 + i] = drive[i]
+            u[j_b0 + i] = brake[i]
+        if _rk4(x, u, q, cf, cr, dt, n_step) < n_step:
+            return DIVERGED, k + 1
+    # the final state, which the simulator publishes and the maneuver answers as done
+    final = out[n_ticks]
+    _outputs(x, u, q, cf, cr, dx, aux, (n_ticks * n_step) * dt, final)
+    for c in range(C_HAND, N_CHANNELS):
+        final[c] = math.nan
+    return DONE, n_ticks
+
+
+# ------------------------------------------------------------------------------ compiling
+
+def _source_digest() -> str:
+    """Short hash of the sources compiled into this variant: this file, the 8-DOF model and
+    kernels, the tire, and the law, actuator and driver functions it calls. numba checks only
+    the stamp of a function's own file, so without it an edited law or driver would run from
+    a stale cache."""
+    import fourws_control.base
+    import fourws_control.ff_zero_sideslip
+    import fourws_control.fws
+    import fourws_control.lqr
+    import fourws_control.rwc_3dof
+    import fourws_control.sol1
+    import fourws_control.sol2
+    import fourws_sim.drivers
+    from fourws_sim.models import eightdof, eightdof_kernels
+    from fourws_sim.tires import get_tire
+
+    digest = hashlib.sha1()
+    digest.update(Path(__file__).read_bytes())
+    digest.update(repr(sorted(JIT_OPTIONS.items())).encode())
+    for module in (fourws_control.base, fourws_control.ff_zero_sideslip, fourws_control.fws,
+                   fourws_control.lqr, fourws_control.rwc_3dof, fourws_control.sol1,
+                   fourws_control.sol2, fourws_sim.drivers, eightdof, eightdof_kernels,
+                   get_tire(TIRE_NAME)):
+        digest.update(Path(module.__file__).read_bytes())  # type: ignore[arg-type]
+    return digest.hexdigest()[:12]
+
+
+#: numba options: those of the 8-DOF kernels (IEEE division, no fast-math: no contraction or
+#: reassociation, so the compiled arithmetic is the interpreted one).
+JIT_OPTIONS: dict[str, Any] = {"error_model": "numpy"}
+_VARIANT = f"{TIRE_NAME}_{_source_digest()}"
+
+
+def _jit(func: Any) -> Any:
+    """Compile ``func`` for this variant, disk-cached under a name holding the variant and the
+    digest of its sources (a copy, so the module's own function keeps its name)."""
+    copy = types.FunctionType(func.__code__, func.__globals__, func.__name__,
+                              func.__defaults__, func.__closure__)
+    copy.__qualname__ = f"{func.__name__}_{_VARIANT}"
+    copy.__doc__ = func.__doc__
+    return numba.njit(cache=True, **JIT_OPTIONS)(copy)
+
+
+_gains = numba.njit(inline="always", **JIT_OPTIONS)(_gains)
+_outputs = numba.njit(inline="always", **JIT_OPTIONS)(_outputs)
+closed_loop = _jit(closed_loop)

@@ -1,0 +1,216 @@
+"""A study's output folder: blocks of results written as they finish, the merged table, and
+what was run.
+
+Layout of ``DIR``::
+
+    study.yaml              the study file as given
+    base_run_config.json    the resolved base run (RunConfig.to_dict(), versioned)
+    versions.json           software versions
+    manifest.json           study name, the hash that identifies it, points, block size
+    blocks/block-000042.parquet   the rows of block 42 (points 42*B .. 42*B + B - 1)
+    results.parquet         every finished row, sorted by point (written at the end, and
+                            when the study is interrupted)
+
+A block is written to a hidden temporary file and renamed into ``blocks/`` when complete
+(an atomic step on POSIX file systems), so ``blocks/`` only ever holds complete blocks:
+whatever kills the study, ``pyarrow.parquet.read_table("DIR/blocks")`` (or
+:func:`read_results`) reads every point finished so far, and ``--resume`` runs exactly the
+blocks that are not there (:meth:`StudyStore.missing_blocks`). All block files share one
+schema (:func:`fourws_study.point.columns`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+from typing import Any, Sequence
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import yaml
+
+from fourws_sim.errors import ParameterError
+from fourws_study.point import columns
+from fourws_study.spec import Study
+
+BLOCKS = "blocks"
+RESULTS = "results.parquet"
+MANIFEST = "manifest.json"
+#: Layout version of the folder.
+STORE_VERSION = 1
+
+_TYPES = {"int64": pa.int64(), "float64": pa.float64(), "bool": pa.bool_(),
+          "string": pa.string(), "list<float64>": pa.list_(pa.float64())}
+
+
+def schema(study: Study) -> pa.Schema:
+    """The Arrow schema of the study's result rows."""
+    return pa.schema([(name, _TYPES[kind]) for name, kind in columns(study)])
+
+
+def rows_to_table(rows: Sequence[dict[str, Any]], study_schema: pa.Schema) -> pa.Table:
+    """Rows (mappings) as a table of ``study_schema`` (missing values are null)."""
+    data = {f.name: [row.get(f.name) for row in rows] for f in study_schema}
+    return pa.table(data, schema=study_schema)
+
+
+def study_hash(study: Study) -> str:
+    """What identifies a study's results: its file's content without the parts that do not
+    change a row (``description``, ``report``) and its resolved base run (a changed vehicle
+    file changes the runs even when the study file did not)."""
+    data = yaml.safe_load(study.text)
+    if isinstance(data, dict):
+        data = {k: v for k, v in data.items() if k not in ("description", "report")}
+    base = study.base_config().to_dict()
+    base.pop("versions", None)
+    digest = hashlib.sha256()
+    digest.update(json.dumps(data, sort_keys=True, default=str).encode())
+    digest.update(json.dumps(base, sort_keys=True, default=str).encode())
+    return digest.hexdigest()
+
+
+def software_versions_all() -> dict[str, str]:
+    """Versions of the software a study uses."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from fourws_run.config import software_versions
+
+    out = software_versions()
+    for dist in ("numba", "scipy", "pyarrow", "dask", "distributed"):
+        try:
+            out[dist] = version(dist)
+        except PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+class StudyStore:
+    """The output folder of one study (module docstring).
+
+    Parameters
+    ----------
+    root : Path
+        ``DIR``.
+    study : Study
+    block_size : int
+        Points per block.
+    """
+
+    def __init__(self, root: Path, study: Study, block_size: int) -> None:
+        self.root = Path(root)
+        self.study = study
+        self.block_size = int(block_size)
+        self.schema = schema(study)
+        self.hash = study_hash(study)
+
+    # ---------------------------------------------------------------- blocks
+    @property
+    def n_blocks(self) -> int:
+        """Blocks of the study."""
+        return -(-self.study.n_points // self.block_size)
+
+    def block_points(self, block: int) -> range:
+        """Point numbers of ``block``."""
+        start = block * self.block_size
+        return range(start, min(start + self.block_size, self.study.n_points))
+
+    def block_path(self, block: int) -> Path:
+        """File of a finished block."""
+        return self.root / BLOCKS / f"block-{block:06d}.parquet"
+
+    def _valid_block(self, block: int) -> bool:
+        path = self.block_path(block)
+        if not path.is_file():
+            return False
+        try:
+            table = pq.read_table(path, columns=["point"])
+        except (OSError, pa.ArrowInvalid):
+            return False
+        return table.column("point").to_pylist() == list(self.block_points(block))
+
+    def missing_blocks(self) -> list[int]:
+        """Blocks with no complete file (a resumed study runs these)."""
+        return [b for b in range(self.n_blocks) if not self._valid_block(b)]
+
+    def write_block(self, block: int, table: pa.Table) -> Path:
+        """Write a finished block: a hidden temporary file, then renamed into place."""
+        path = self.block_path(block)
+        tmp = path.with_name(f".{path.name}.tmp")
+        pq.write_table(table.cast(self.schema), tmp)
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+        return path
+
+    # ---------------------------------------------------------------- folder
+    def open(self, resume: bool) -> None:
+        """Create the folder, or check it for ``resume``.
+
+        Raises
+        ------
+        ParameterError
+            The folder holds results and ``resume`` is not set, or it holds another study's
+            (or an edited study's) results.
+        """
+        manifest = self.root / MANIFEST
+        blocks = self.root / BLOCKS
+        if manifest.is_file():
+            try:
+                old = json.loads(manifest.read_text())
+            except json.JSONDecodeError:
+                old = {}
+            if not resume:
+                raise ParameterError("--out", f"{self.root} already holds study results; "
+                                     "give --resume to finish them or another --out")
+            if old.get("hash") != self.hash or old.get("block_size") != self.block_size:
+                raise ParameterError("--resume", f"{self.root} holds the results of "
+                                     f"{old.get('study', 'another study')!r} with another "
+                                     "study file, base run or block size; use another --out")
+        elif resume and blocks.is_dir() and any(blocks.iterdir()):
+            raise ParameterError("--resume", f"{self.root} has blocks but no {MANIFEST}; "
+                                 "it is not a study folder")
+        blocks.mkdir(parents=True, exist_ok=True)
+        (self.root / "study.yaml").write_text(self.study.text)
+        (self.root / "base_run_config.json").write_text(
+            json.dumps(self.study.base_config().to_dict(), indent=2, default=str))
+        (self.root / "versions.json").write_text(json.dumps(software_versions_all(),
+                                                            indent=2))
+        manifest.write_text(json.dumps({
+            "version": STORE_VERSION, "study": self.study.name, "source": self.study.source,
+            "hash": self.hash, "points": self.study.n_points, "block_size": self.block_size,
+            "blocks": self.n_blocks, "summary": self.study.to_summary()}, indent=2))
+
+    def merge(self) -> tuple[Path, int]:
+        """Write ``results.parquet`` from the finished blocks (sorted by point); returns the
+        path and the number of rows."""
+        table = read_results(self.root)
+        path = self.root / RESULTS
+        tmp = path.with_name(f".{path.name}.tmp")
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+        return path, table.num_rows
+
+
+def read_results(root: str | Path) -> pa.Table:
+    """Every finished row of the study in ``root`` (its ``blocks/``), sorted by point; works
+    on a study that is still running or was killed.
+
+    Raises
+    ------
+    ParameterError
+        ``root`` is not a study folder.
+    """
+    blocks = Path(root) / BLOCKS
+    if not blocks.is_dir():
+        raise ParameterError("DIR", f"{root} is not a study folder (no {BLOCKS}/)")
+    files = sorted(blocks.glob("block-*.parquet"))
+    if not files:
+        raise ParameterError("DIR", f"{root} has no finished block yet")
+    table = pa.concat_tables([pq.read_table(f) for f in files])
+    return table.sort_by("point")
+
+
+__all__ = ["BLOCKS", "MANIFEST", "RESULTS", "StudyStore", "read_results", "rows_to_table",
+           "schema", "software_versions_all", "study_hash"]

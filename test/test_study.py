@@ -1,0 +1,390 @@
+"""fourws study: points equal the offline twin, seeds reproduce, backends agree, a killed study
+resumes exactly, the stability boundary agrees with the critical speeds, bad study files are
+one-line errors, and a point rerun through the node graph gives the study's row.
+
+Sources of the numbers: the offline twin :func:`fourws_run.closed_loop.run_closed_loop` (the
+reference the node graph is tested against in ``test_ros_graph.py``); the analytic means of
+the sampled distributions (scipy.stats); the critical speeds of
+:func:`fourws_analysis.linear.critical_speed` (what ``fourws linear --critical-speed`` prints)
+and of the 8-DOF linearized closed loop; analytic clearances of straight paths through the
+ISO 3888-2 course.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+import scipy.stats
+import yaml
+
+from fourws_analysis import linear
+from fourws_analysis.extremes import run_extremes
+from fourws_analysis.lane_change import lane_change_metrics
+from fourws_cli.main import main as fourws_main
+from fourws_run.closed_loop import run_closed_loop
+from fourws_sim.maneuvers import DoubleLaneChangeParams
+from fourws_study.execute import run_study
+from fourws_study.kernel import build_law, run_compiled, run_interpreted
+from fourws_study.point import law_for, run_point
+from fourws_study.report import critical_speed_8dof_lin, write_study_report
+from fourws_study.spec import load_study
+from fourws_study.store import read_results
+
+ROOT = Path(__file__).resolve().parent.parent
+#: ISO 7401 step steer of the default scenario, 3 s (the shortest run whose hold after the
+#: step gives the ISO 7401 steady window twice).
+STEP = {"name": "step_3s", "type": "step_steer", "initial_speed_mps": 23.611111111111111,
+        "duration_s": 3.0, "amplitude_rad": 0.0261799387799, "start_s": 0.5,
+        "ramp_time_s": 0.1}
+SINE = {"name": "sine_2s", "type": "sine", "initial_speed_mps": 23.611111111111111,
+        "duration_s": 2.0, "amplitude_rad": 0.0261799387799, "frequency_hz": 1.0,
+        "start_s": 0.3}
+#: Columns that describe the computation, not the point.
+NOT_ROW = ["wall_time_s", "engine", "fallback"]
+
+
+def _scenario(maneuver=STEP, **extra):
+    data = {"name": "test", "vehicle": "table_8_1", "maneuver": dict(maneuver),
+            "laws": ["fws"], "model": "8dof"}
+    data.update(extra)
+    return data
+
+
+def _write(tmp_path: Path, name: str, data: dict) -> Path:
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump({"name": name, **data}, sort_keys=False))
+    return path
+
+
+def _study(tmp_path: Path, name: str, **data):
+    return load_study(_write(tmp_path, name, data))
+
+
+def _table(path: Path):
+    return pq.read_table(path).drop_columns(NOT_ROW)
+
+
+# ------------------------------------------------------------------ points and the twin
+
+@pytest.mark.parametrize("maneuver", [STEP, SINE], ids=["step_steer", "sine"])
+def test_compiled_point_equals_offline_twin_bit_for_bit(tmp_path, maneuver):
+    """For four laws (closed form, 3-DOF fit, LQR gain table, zero-sideslip feed-forward)
+    with a belief 30 % off, the compiled closed loop of a study point gives the arrays of
+    run_closed_loop of the same RunConfig to the last bit: every state channel, the driver's
+    commands, the law's command and the actuator's angle at every tick."""
+    study = _study(tmp_path, "twin", scenario=_scenario(maneuver),
+                   grid={"belief.cornering_stiffness_scale": [0.7],
+                         "law": ["sol1", "rwc4_3dof", "lqr", "ff_zero_sideslip"]})
+    for point in study.points():
+        config = study.config(point)
+        compiled = run_compiled(config, build_law(config))
+        assert not isinstance(compiled, str), compiled
+        twin = run_closed_loop(config.vehicle, config.maneuver, config.law,
+                               model=config.model, dt_s=config.integration_step_s,
+                               control_period_s=config.control_period_s,
+                               belief_vehicle=config.belief, integrator=config.integrator,
+                               law_options=config.law_options, tire=config.tire)
+        assert compiled.time_s.tobytes() == twin.time_s.tobytes()
+        for name in ("yaw_rate_radps", "lateral_velocity_mps", "speed_mps", "roll_rad",
+                     "x_m", "y_m", "sideslip_rad", "lateral_accel_mps2",
+                     "rear_wheel_angle_rad", "front_wheel_angle_rad"):
+            assert compiled.channels[name].tobytes() == twin[name].tobytes(), name
+        assert compiled.channels["rear_command_rad"].tobytes() == twin.rear_angle_rad.tobytes()
+        assert compiled.channels["rear_law_rad"].tobytes() == twin.rear_law_rad.tobytes()
+        assert compiled.channels["front_wheel_angle_cmd_rad"].tobytes() \
+            == twin.driver["front_wheel_angle_rad"].tobytes()
+        # the law acts: its rear steer is not zero (else the test would prove little)
+        assert np.max(np.abs(twin.rear_angle_rad)) > 1e-4
+
+
+def test_study_rows_do_not_depend_on_the_path(tmp_path):
+    """A point's row is the same whether its run took the compiled path or the interpreted
+    twin, and a lane change (the path-tracking driver) runs on the twin by itself."""
+    study = _study(tmp_path, "paths", scenario=_scenario(),
+                   grid={"speed_kmh": [60.0, 130.0], "law": ["fws", "rwc2_3dof"]})
+    rows = {}
+    for i in range(study.n_points):
+        a, b = run_point(study, i), run_point(study, i, compiled=False)
+        assert a["engine"] == "compiled" and b["engine"] == "twin"
+        for key in set(a) - set(NOT_ROW):
+            assert a[key] == b[key] or (a[key] != a[key] and b[key] != b[key]), key
+        rows[(a["law"], a["speed_kmh"])] = a
+    # fws at 130 km/h is past table_8_1's critical speed: the point spins (its status says
+    # so) and the study goes on
+    assert rows[("fws", 130.0)]["status"] == "spun"
+    assert rows[("fws", 60.0)]["status"] == rows[("rwc2_3dof", 130.0)]["status"] == "ok"
+    lane = load_study(_write(tmp_path, "lane", {"scenario": "lane_change", "law": "sol1"}))
+    config = lane.config(lane.point(0))
+    assert isinstance(run_compiled(config, law_for(config)), str)
+    assert run_interpreted(config).engine == "twin"
+
+
+# ------------------------------------------------------------------ seeds and draws
+
+def test_seeds_reproduce_and_draws_follow_their_distributions(tmp_path):
+    """A point's draws come from its seed alone (the same on a fresh load), the points of
+    one sample share them, and 2000 draws have the analytic means of their distributions
+    (truncated normal, uniform, log-normal median) within 4 standard errors."""
+    data = {"scenario": _scenario(), "grid": {"law": ["fws", "sol1"]},
+            "monte_carlo": {"samples": 2000, "seed": 7, "fields": {
+                "vehicle.chassis.mass_kg, vehicle.roll.sprung_mass_kg": {
+                    "apply": "scale", "distribution": "normal", "mean": 1.0, "std": 0.05,
+                    "truncate": [0.95, 1.2]},
+                "vehicle.chassis.cg_to_front_axle_m, -vehicle.chassis.cg_to_rear_axle_m": {
+                    "apply": "shift", "distribution": "uniform", "low": -0.1, "high": 0.1},
+                "vehicle.chassis.yaw_inertia_kgm2": {
+                    "apply": "scale", "distribution": "lognormal", "median": 1.1,
+                    "sigma": 0.05}}}}
+    study = load_study(_write(tmp_path, "mc", data))
+    # a fresh load (of fewer samples: a sample's seed depends on the study seed and its number)
+    again = load_study(_write(tmp_path, "mc", {
+        **data, "monte_carlo": {**data["monte_carlo"], "samples": 1235}}))
+    p, q = study.point(2 * 1234 + 1), again.point(2 * 1234 + 1)
+    assert p == q and p.sample == 1234 and p.value("law") == "sol1"
+    assert study.point(2 * 1234).values[1:] == p.values[1:]  # one sample, both laws
+    assert study.point(2 * 1235).seed != p.seed
+    assert study.draws(p.seed) == tuple(v for _, v in p.values[1:])
+    config = study.config(p)
+    c = config.vehicle.chassis
+    mass, shift, inertia = study.draws(p.seed)
+    assert c.mass_kg == 1298.857 * mass
+    assert config.vehicle.roll.sprung_mass_kg == 1167.512 * mass
+    assert c.cg_to_front_axle_m == 1.0 + shift and c.cg_to_rear_axle_m == 1.45 - shift
+    assert config.belief.chassis.mass_kg == c.mass_kg  # the belief is the simulated car
+    draws = np.array([study.draws(study.sample_seed(s)) for s in range(study.n_samples)])
+    n = draws.shape[0]
+    tn = scipy.stats.truncnorm(-1.0, 4.0, loc=1.0, scale=0.05)
+    assert abs(draws[:, 0].mean() - tn.mean()) < 4 * tn.std() / math.sqrt(n)
+    assert draws[:, 0].min() >= 0.95 and draws[:, 0].max() <= 1.2
+    assert abs(draws[:, 1].mean()) < 4 * (0.2 / math.sqrt(12)) / math.sqrt(n)
+    below = np.mean(draws[:, 2] < 1.1)  # the median of a log-normal
+    assert abs(below - 0.5) < 4 * 0.5 / math.sqrt(n)
+
+
+# ------------------------------------------------------------------ backends, kill, resume
+
+@pytest.fixture(scope="module")
+def small_study(tmp_path_factory):
+    """Six points (three laws, two speeds), one per block, and their serial results."""
+    tmp = tmp_path_factory.mktemp("study")
+    path = _write(tmp, "small", {"scenario": _scenario(), "block_size": 1,
+                                 "grid": {"speed_kmh": [70.0, 110.0],
+                                          "law": ["fws", "sol1", "rwc2_3dof"]}})
+    study = load_study(path)
+    serial = tmp / "serial"
+    run_study(study, serial, workers=1)
+    return path, study, serial
+
+
+def test_backends_give_identical_rows(small_study, tmp_path):
+    """Serial, two local worker processes and a Dask LocalCluster of two workers write the
+    same table (every column but the wall time)."""
+    _, study, serial = small_study
+    local = run_study(study, tmp_path / "local", workers=2)
+    dask = run_study(study, tmp_path / "dask", workers=2, backend="dask")
+    assert local.done == dask.done == study.n_points == 6
+    ref = _table(serial / "results.parquet")
+    assert ref.column("point").to_pylist() == list(range(6))
+    assert _table(tmp_path / "local" / "results.parquet").equals(ref)
+    assert _table(tmp_path / "dask" / "results.parquet").equals(ref)
+
+
+def test_report_lists_the_worst_points_with_their_rerun(small_study):
+    """The report has a section per law and ranks the points by peak sideslip: its first
+    row is the point with the largest one, with the command that reruns it."""
+    _, study, serial = small_study
+    index = write_study_report(serial, study)
+    text = index.read_text()
+    table = read_results(serial)
+    beta = np.array(table.column("max_abs_sideslip_rad").to_pylist())
+    top = int(np.argmax(beta))
+    worst = text[text.index("Worst points"):]
+    assert f"fourws study rerun {serial} --point {top}<" in worst.split("</tr>")[1]
+    for law in ("fws", "sol1", "rwc2_3dof"):
+        assert f"<h2>Law {law}</h2>" in text
+        assert (index.parent / f"stability_{law}.png").stat().st_size > 0
+
+
+def test_killed_study_resumes_to_the_uninterrupted_table(small_study, tmp_path):
+    """SIGKILL while a study runs leaves a readable partial table (complete blocks only);
+    --resume runs the rest: every point once, none lost, and the table equals the
+    uninterrupted run's."""
+    path, study, serial = small_study
+    out = tmp_path / "killed"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-m", "fourws_cli.main", "study", str(path),
+                             "--out", str(out), "--workers", "1", "--no-report",
+                             "--interpreted"], cwd=ROOT, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120.0
+    try:
+        while time.monotonic() < deadline and not any((out / "blocks").glob("block-*")):
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGKILL)
+    finally:
+        proc.wait(timeout=30)
+    partial = pq.read_table(out / "blocks")  # what the kill left, read by plain pyarrow
+    points = partial.column("point").to_pylist()
+    assert 1 <= len(points) < study.n_points, "the kill came after the study had finished"
+    assert len(set(points)) == len(points)
+    resumed = run_study(study, out, workers=1, resume=True)
+    assert resumed.ran == study.n_points - len(points)
+    final = _table(out / "results.parquet")
+    assert final.column("point").to_pylist() == list(range(study.n_points))
+    ref = _table(serial / "results.parquet")
+    assert final.equals(ref)
+
+
+# ------------------------------------------------------------------ stability boundary
+
+def test_stability_boundary_agrees_with_the_critical_speeds(tmp_path):
+    """sol2 designed on a belief with 40 % less front cornering stiffness (Solution 2 is
+    unstable on an oversteer belief, chapter 4): along the speed axis the study's points turn
+    unstable between two grid speeds that bracket (a) the critical speed of the 3-DOF closed
+    loop at that belief -- ``fourws linear --critical-speed`` (linear.critical_speed) -- in
+    the points' 3-DOF verdict, (b) that of the 8-DOF linearized closed loop in the points'
+    8-DOF verdict, and (c) the nonlinear 8-DOF runs spin from the first grid speed past (b):
+    the simulation and its linearization agree to within the grid step."""
+    study = _study(tmp_path, "boundary", scenario=_scenario(
+        {**STEP, "duration_s": 5.0}), law="sol2",
+        grid={"belief.cornering_stiffness_scale_front": [0.6],
+              "speed_mps": {"from": 10.0, "to": 22.5, "step": 2.5}})
+    rows = [run_point(study, i) for i in range(study.n_points)]
+    speeds = np.array([r["speed_mps"] for r in rows])
+    config = study.config(study.point(0))
+    law = law_for(config)
+    v3 = linear.critical_speed("3dof", config.vehicle, law, (5.0, 60.0)).critical_speed_mps
+    v8 = critical_speed_8dof_lin(config.vehicle, law, config.belief, config.law_options,
+                                 5.0, 60.0)
+    assert v3 is not None and v8 is not None
+    for verdict, vc in ((np.array([r["stable_linear"] for r in rows]), v3),
+                        (np.array([r["stable_8dof_lin"] for r in rows]), v8),
+                        (np.array([r["status"] == "ok" for r in rows]), v8)):
+        assert np.all(verdict[speeds < vc]) and not np.any(verdict[speeds >= vc]), (vc,
+                                                                                    verdict)
+        assert speeds[verdict].max() < vc <= speeds[~verdict].min() <= vc + 2.5
+
+
+# ------------------------------------------------------------------ bad study files
+
+BAD = [
+    ({"grid": {"vehicle.chassis.mas_kg": [1000.0]}}, "vehicle.chassis.mas_kg"),
+    ({"grid": {"speed_kmh": []}}, "grid.speed_kmh"),
+    ({"grid": {"law": ["fws", "nope"]}}, "nope"),
+    ({"grid": {"vehicle.chassis.mass_kg": [-5.0]}}, "chassis.mass_kg: must be > 0"),
+    ({"grid": {"vehicle.chassis.mass_kg": {"scale": [0.5]}}}, "roll.sprung_mass_kg"),
+    ({"monte_carlo": {"samples": 10, "fields": {"vehicle.chassis.mass_kg": {
+        "distribution": "normal", "mean": 1300.0, "std": 0.0}}}}, "std"),
+    ({"monte_carlo": {"samples": 10, "fields": {"vehicle.chassis.mass_kg": {
+        "distribution": "normal", "mean": 1300.0, "std": 100.0}}}}, "truncate"),
+    ({"monte_carlo": {"samples": 10, "fields": {"vehicle.chassis.mass_kg": {
+        "distribution": "uniform", "low": 2.0, "high": 1.0}}}}, "high"),
+    ({"grid": {"vehicle.chassis.mass_kg": {"shift": [10.0]}}, "grids": {}}, "grids"),
+    ({"monte_carlo": {"samples": 1_000_001, "fields": {"vehicle.chassis.mass_kg": {
+        "distribution": "uniform", "low": 1200.0, "high": 1400.0}}}}, "--force"),
+]
+
+
+@pytest.mark.parametrize("data, names", BAD, ids=[b[1] for b in BAD])
+def test_bad_study_files_are_one_line_errors(tmp_path, capsys, data, names):
+    """Each bad study ends ``fourws study`` with exit code 2 and one line on stderr naming
+    the field and the study file, before any point runs."""
+    path = _write(tmp_path, "bad", {"scenario": _scenario(), **data})
+    code = fourws_main(["study", str(path), "--out", str(tmp_path / "out"), "--no-report"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1, err
+    assert names in err
+    assert str(path) in err or "valid:" in err  # an unknown name lists the valid ones
+    assert not (tmp_path / "out" / "blocks").exists() or not any(
+        (tmp_path / "out" / "blocks").iterdir())
+
+
+# ------------------------------------------------------------------ metrics
+
+def test_lane_change_clearance_of_straight_paths():
+    """ISO 3888-2 course with W = 1.7 m: driving straight along y = 0 clears sections 1 and 5
+    by (w1 - W) / 2 but misses section 3 by its whole offset, y3_right + W/2; a path inside
+    every gate with 5 cm to spare passes with clearance 0.05 m."""
+    p = DoubleLaneChangeParams()
+    sections = p.sections
+    x = np.arange(0.0, 100.0, 0.25)
+    straight = lane_change_metrics(x, np.zeros_like(x), sections, 1.7)
+    assert straight.clearance_m == pytest.approx(-(sections[1][2] + 0.85), abs=1e-12)
+    assert not straight.passed and straight.sections_driven == 3
+    y = np.zeros_like(x)
+    for x0, x1, y_right, _ in sections:
+        y[(x >= x0 - 1e-9) & (x <= x1 + 1e-9)] = y_right + 0.85 + 0.05
+    ok = lane_change_metrics(x, y, sections, 1.7)
+    assert ok.passed and ok.clearance_m == pytest.approx(0.05, abs=1e-12)
+    short = lane_change_metrics(x[x < 50.0], y[x < 50.0], sections, 1.7)
+    assert not short.passed and short.sections_driven == 1
+
+
+def test_run_extremes_count_the_actuator_limits():
+    """A rear actuator ramping at its rate limit (30 deg/s, 10 ms ticks: 5.24 mrad a tick)
+    for 16 ticks, then reaching its 5-deg angle limit with a shorter move and holding it for
+    7 ticks in all: 0.16 s at the rate limit, 0.07 s at the angle limit; sideslip beyond
+    20 deg from t = 0.03 s is a spin from then."""
+    rate, limit, period = math.radians(30.0), math.radians(5.0), 0.01
+    rear = np.concatenate([np.arange(1, 17) * rate * period, np.full(7, limit)])
+    assert limit - 16 * rate * period < rate * period  # the last move is a short one
+    t = np.arange(rear.size) * period
+    beta = np.where(t >= 0.03, math.radians(25.0), 0.0)
+    ex = run_extremes(t, beta, beta, beta, beta, rear, period, limit, rate)
+    assert ex.time_at_rear_rate_limit_s == pytest.approx(16 * period)
+    assert ex.time_at_rear_angle_limit_s == pytest.approx(7 * period)
+    assert ex.spin_time_s == pytest.approx(0.03)
+    assert ex.max_abs_sideslip_rad == pytest.approx(math.radians(25.0))
+
+
+# ------------------------------------------------------------------ the node graph
+
+def test_rerun_through_the_graph_equals_the_study_row(tmp_path):
+    """A point of a finished study run through the real node graph (run_graph with the
+    point's RunConfig) records a bag whose row -- the same metric functions on its ticks --
+    equals the study's row in every compared column; and ``fourws analyze``'s ISO 7401
+    numbers of that bag equal the study's exactly (the study hands the analysis its run as
+    the bag holds it)."""
+    from fourws_analysis.bag import resample
+    from fourws_analysis.compare import analyze_run
+    from fourws_ros.graph_run import run_graph
+    from fourws_study.rerun import bag_row, compare_rows, study_of, study_row
+
+    path = _write(tmp_path, "one", {"scenario": _scenario(), "law": "sol1",
+                                    "grid": {"belief.cornering_stiffness_scale": [0.8],
+                                             "vehicle.chassis.mass_kg": {"scale": [1.05]}}})
+    run_study(load_study(path), tmp_path / "study", workers=1)
+    study = study_of(tmp_path / "study")
+    config = study.config(study.point(0))
+    record = run_graph(config, tmp_path / "graph", run_name="point-0")
+    assert record.ok, record.reason
+    graph = bag_row(study, 0, config, record.bag_path)
+    row = study_row(tmp_path / "study", 0)
+    diffs = compare_rows(row, graph)
+    assert len(diffs) > 40
+    assert max(d[3] for d in diffs) == 0.0, [d for d in diffs if d[3] > 0.0]
+    analysed = analyze_run(resample(load_bag_of(record.bag_path)), eig_sweep=False,
+                           models=False).metrics()["iso7401_step"]
+    compared = 0
+    for channel in ("yaw_rate_radps", "lateral_accel_mps2"):
+        for key, value in analysed[channel].items():
+            if isinstance(value, float):
+                assert row[f"iso7401.{channel}.{key}"] == value, (channel, key)
+                compared += 1
+    assert compared >= 10
+
+
+def load_bag_of(path):
+    from fourws_analysis.bag import load_bag
+
+    return load_bag(path)
