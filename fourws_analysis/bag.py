@@ -406,7 +406,8 @@ class UniformRun:
     channels : dict of str to ndarray
         ``STATE_CHANNELS`` plus ``steering_wheel_angle_rad`` (driver input, or front road-wheel
         angle times the steering ratio when no driver input was recorded) and, when the driver
-        input was recorded, ``front_wheel_angle_cmd_rad``: the driver's road-wheel command.
+        input was recorded, ``front_wheel_angle_cmd_rad``: the driver's road-wheel command, and
+        ``steering_torque_nm``: the driver's steering-wheel torque (free steering control).
         The state's ``front_wheel_angle_rad`` is the angle actually applied, which in the
         8-DOF includes roll steer; the linear models take the command as their input (roll
         steer is inside the plant), so the analysis uses the command when it exists.
@@ -485,7 +486,10 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
     if driver is not None and len(driver) >= 2 and "steering_wheel_angle_rad" in driver.fields:
         # zero-order hold: a driver command holds until the next one
         for src, dst in (("steering_wheel_angle_rad", "steering_wheel_angle_rad"),
-                         ("front_wheel_angle_rad", "front_wheel_angle_cmd_rad")):
+                         ("front_wheel_angle_rad", "front_wheel_angle_cmd_rad"),
+                         ("steering_torque_nm", "steering_torque_nm")):
+            if src not in driver.fields:
+                continue
             t, v = _monotonic(driver.time_s, driver.fields[src].astype(np.float64))
             idx = np.clip(np.searchsorted(t, grid + 1e-12, side="right") - 1, 0, t.size - 1)
             channels[dst] = v[idx]

@@ -12,6 +12,9 @@ maneuver                                    metrics
 ``step_steer``, ``ramp_steer``              ISO 7401 step metrics, identified eigenvalues
 ``slow_ramp_steer``, ``constant_radius``    ISO 4138 gradients, understeer, char. speed
 ``double_lane_change``                      ISO 3888-2 clearance to the cones, pass/fail
+``sine_with_dwell``, ``steering_release``,  the regulation's or standard's test
+``slowly_increasing_steer``,                (:mod:`fourws_analysis.standards`: FMVSS 126,
+``steering_pulse``                          ISO 17288)
 every run with a vehicle                    eigenvalues of the linearized 8-DOF vs speed
 ==========================================  =============================================
 
@@ -34,7 +37,8 @@ import control
 import numpy as np
 
 from fourws_analysis import frequency as fq
-from fourws_analysis import identify, iso4138, iso7401, lane_change, linear, linearize, units
+from fourws_analysis import (identify, iso4138, iso7401, lane_change, linear, linearize,
+                             standards, units)
 from fourws_analysis.bag import MetricUnavailableError, UniformRun
 from fourws_control import Law, LinearGains, make_law
 from fourws_sim.errors import FourwsError
@@ -99,6 +103,8 @@ class RunAnalysis:
     applied_to_commanded : float or None
         Applied over commanded front angle at the end of a step's hold: 1 + the roll-steer
         share (step runs with both angles recorded).
+    standards : dict
+        The regulation or standard test of the maneuver (:mod:`fourws_analysis.standards`).
     """
 
     run: UniformRun
@@ -122,6 +128,7 @@ class RunAnalysis:
     steer_reference: str = "applied"
     steering_ratio: float | None = None
     applied_to_commanded: float | None = None
+    standards: dict[str, Any] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -199,6 +206,8 @@ class RunAnalysis:
                 for k, m in self.models.items()}
         if self.eig_sweep is not None:
             out["eigenvalues_vs_speed"] = self.eig_sweep.to_dict()
+        for key, value in self.standards.items():
+            out[key] = value.to_dict()
         out["unavailable"] = dict(self.unavailable)
         out["notes"] = list(self.notes)
         return _jsonable(out)
@@ -525,6 +534,10 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
     else:
         res.unavailable["iso3888_lane_change"] = (f"needs a double_lane_change run; this run "
                                                   f"is {man or 'unrecognized'}")
+    # FMVSS 126, ISO 17288
+    found, why = standards.standard_metrics(run, ch, vehicle)
+    res.standards.update(found)
+    res.unavailable.update(why)
 
     if eig_sweep and vehicle is not None and vehicle.body is not None:
         tick(f"{run.name}: 8-DOF eigenvalues vs speed")

@@ -535,9 +535,6 @@ def critical_speed(model_name: str, vehicle: Vehicle, law: Law | str | None = No
         Stability measure: largest real eigenvalue part, or the chapter-5 Lyapunov test
         (smallest leading principal minor of P, see :func:`lyapunov_check`).
     """
-    lo, hi = (check_speed(s, "speed_range_mps") for s in speed_range_mps)
-    if hi <= lo:
-        raise ParameterError("speed_range_mps", f"must be increasing, got {speed_range_mps}")
     law_obj = _law(law, vehicle)
 
     if criterion == "eigenvalues":
@@ -550,6 +547,23 @@ def critical_speed(model_name: str, vehicle: Vehicle, law: Law | str | None = No
     else:
         raise ParameterError("criterion", f"must be 'eigenvalues' or 'lyapunov', got "
                              f"{criterion!r}")
+    return search_critical_speed(margin, speed_range_mps, samples)
+
+
+def search_critical_speed(margin: Any, speed_range_mps: tuple[float, float],
+                          samples: int = _CRITICAL_SPEED_SAMPLES) -> CriticalSpeed:
+    """The lowest speed of ``speed_range_mps`` where ``margin(U)`` (a stability margin of the
+    speed U in m/s, > 0 stable) reaches 0: sampled on a geometric grid of ``samples`` speeds,
+    the first sign change refined with brentq.
+
+    Raises
+    ------
+    ParameterError
+        The range is not two increasing speeds > 0.
+    """
+    lo, hi = (check_speed(s, "speed_range_mps") for s in speed_range_mps)
+    if hi <= lo:
+        raise ParameterError("speed_range_mps", f"must be increasing, got {speed_range_mps}")
     speeds = np.geomspace(lo, hi, int(samples))
     prev_u, prev_m = speeds[0], margin(float(speeds[0]))
     if prev_m <= 0.0:

@@ -15,11 +15,13 @@ For a linear model this reproduces ``(A, B)`` to rounding (tested).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
 from fourws_analysis.bag import MetricUnavailableError
+from fourws_control import Law, make_law
+from fourws_sim.models import get_model
 
 #: Relative finite-difference step.
 REL_STEP = 1e-6
@@ -102,6 +104,60 @@ def _trim(mod: Any, vehicle: Any, speed: float) -> tuple[np.ndarray, np.ndarray,
     raise MetricUnavailableError(
         f"eigenvalues vs speed: model {mod.__name__} has no straight-running trim function "
         "(trim_state/straight_state/initial_state)")
+
+
+@dataclass(frozen=True)
+class EightDofLoop:
+    """The 8-DOF linearized at straight running and a law written in its state and input
+    order (:meth:`fourws_control.base.Law.linear_gains`): ``delta_r = K_x x + K_u u``. With
+    fixed steering control (model ``8dof``) the law's front-angle gain multiplies the driver's
+    input ``DELTA_F``; with the free steering system (``8dof-free``) the law sees the steering
+    system's angle, the state ``DELTA_S`` (the model declares it, ``FRONT_ANGLE_STATE``), as
+    the paper's free-control laws take the front angle state (ch. 3.4/4.4).
+
+    Attributes
+    ----------
+    a, b : numpy.ndarray
+        Open-loop Jacobians (``STATE`` x ``STATE``, ``STATE`` x ``INPUT``), SI.
+    gains : LinearGains
+        The law in the model's order.
+    model : module
+        The model module (``STATE``, ``INPUT``).
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    gains: Any
+    model: Any
+
+    @property
+    def closed(self) -> np.ndarray:
+        """The closed-loop state matrix ``a + b_r K_x``."""
+        return self.a + np.outer(self.b[:, self.model.INPUT.DELTA_R], self.gains.K_x)
+
+    def lateral_eigenvalues(self, tol: float = 1e-6) -> np.ndarray:
+        """Closed-loop eigenvalues (1/s) without the zero ones (position, heading, and the
+        speed-wheel momentum mode at a trim without drag): ``|lambda| > tol``."""
+        ev = np.linalg.eigvals(self.closed)
+        return ev[np.abs(ev) > tol]
+
+
+def eightdof_loop(vehicle: Any, speed_mps: float, law: Any = "fws",
+                  belief_vehicle: Any = None, law_options: Mapping[str, Any] | None = None,
+                  free_steering: bool = False) -> EightDofLoop:
+    """Linearize the 8-DOF (``8dof``, or ``8dof-free`` with ``free_steering``) at straight
+    running at ``speed_mps`` (m/s) by finite differences, with the law written in its order
+    (:class:`EightDofLoop`). ``law`` is a name (built on the belief vehicle with
+    ``law_options``) or a built :class:`fourws_control.Law`."""
+    name = "8dof-free" if free_steering else "8dof"
+    mod = get_model(name)
+    p = mod.params_for(vehicle)
+    a, b = jacobians(mod.derivatives, mod.initial_state(p, speed_mps),
+                     np.zeros(len(mod.INPUT)), p)
+    law_obj = law if isinstance(law, Law) else make_law(
+        law, belief_vehicle if belief_vehicle is not None else vehicle,
+        **dict(law_options or {}))
+    return EightDofLoop(a, b, law_obj.linear_gains(name, vehicle, speed_mps), mod)
 
 
 def eigenvalues_vs_speed(vehicle: Any, speeds_mps: Sequence[float], model: str = "8dof",

@@ -25,6 +25,9 @@ from fourws_analysis import units
 from fourws_analysis.compare import RunAnalysis
 from fourws_analysis.report_figures import (EIG_PLOT_MIN_REAL, plot_bode, plot_eigenvalues,
                                             plot_steady_state, plot_step, plot_time_histories)
+from fourws_analysis.report_standards import (law_verdicts, plot_free_steer,
+                                              plot_sine_with_dwell, standards_tables,
+                                              verdict_items)
 from fourws_analysis.report_texts import (MODEL_NAMES, identification_notes, law_groups,
                                           reading_notes, run_label, stability_notes)
 
@@ -263,7 +266,20 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
                          "One panel per law. Modes faster than -40 1/s (wheel spin, tire lag, "
                          "actuator) are left out; a mode right of the imaginary axis "
                          "(shaded) is unstable.", eig_items))
+        # the regulation and standard tests (fourws_analysis.report_standards)
+        sections.append(("FMVSS No. 126 sine with dwell",
+                         draw(plot_sine_with_dwell, runs, "sine_with_dwell.png"),
+                         "Left: yaw rate over the second peak yaw rate, from the completion of "
+                         "steer; the markers are the limits 0.35 at 1.00 s and 0.20 at 1.75 s. "
+                         "Right: lateral displacement (the lateral acceleration integrated "
+                         "twice from the beginning of steer); the marker is 1.83 m at 1.07 s "
+                         "(runs of 5 A and more).", verdict_items(runs)))
+        sections.append(("ISO 17288 free steer", draw(plot_free_steer, runs, "free_steer.png"),
+                         "Yaw rate and steering-wheel angle from the release of the steering "
+                         "wheel (steering release) or the end of the torque pulse.", []))
     metrics = {"runs": {r.name: r.metrics() for r in runs}, "failed_bags": dict(failures or {})}
+    if law_verdicts(runs):
+        metrics["fmvss126_law_verdicts"] = [v.to_dict() for v in law_verdicts(runs)]
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>fourws analysis</title>"
              f"<style>{_CSS}</style></head><body><h1>fourws: analysis of "
@@ -277,7 +293,9 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
             + "</ul>")
     if runs:
         parts.append("<h2>Metrics</h2>" + "".join(
-            _table_html(title, rows, runs) for title, rows in metric_tables(runs)))
+            _table_html(title, rows, runs) for title, rows in metric_tables(runs)) + "".join(
+            _table_html(title, _collect(members, specs), members)
+            for title, specs, members in standards_tables(runs)))
     for title, png, caption, items in sections:
         if png is None and not items:
             continue

@@ -124,11 +124,15 @@ def _expected(metric: str, r: Any) -> bool:
 
 def _print_summary(r: Any) -> None:
     """A few lines per run when neither --json nor --report is given."""
+    # the analysis package is imported where it is used, as in run(): `fourws --help` stays
+    # free of scipy and the bag reader
+    from fourws_analysis.standards import STANDARD_KEYS
+
     metrics = r.metrics()
     speed = metrics["speed_mps"]
     where = f", {speed:.1f} m/s" if speed else ""
     print(f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}{where}")
     for key in ("frequency_response", "iso7401_step", "iso4138_steady_state",
-                "iso3888_lane_change", "identified_modes"):
+                "iso3888_lane_change", "identified_modes", *STANDARD_KEYS.values()):
         if key in metrics:
             print(f"  {key}: {json.dumps(metrics[key])[:300]}")

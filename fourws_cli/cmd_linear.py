@@ -12,6 +12,10 @@ Output (``--json``; keys are stable)::
      "controllability": {...}, "law_gains": {...},
      "lyapunov": {"stable", "leading_minors"}   (chapter 5: A^T P + P A = -I, Sylvester),
      "critical_speed_mps": float or null        (with --critical-speed),
+     "critical_speed_8dof_free": {...}          (with --model 2dof-free --critical-speed: the
+                                                 free-control critical speed of the linearized
+                                                 8-DOF with its steering system, same car and
+                                                 law, or why it is unavailable),
      "transfer_functions": [...]                (with --transfer-functions),
      "bode": {"frequencies_hz", "magnitude", "phase_deg", "units"}  (with --bode),
      "bode_plot": PNG path                       (with --bode-plot)}
@@ -21,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import Any
 
 from fourws_cli._bounds import KMH_PER_MPS, speed_kmh, speed_mps
 from fourws_cli._law_args import add_law_arguments, build_law
@@ -72,6 +77,8 @@ def run(args: argparse.Namespace) -> int:
                                   with_critical_speed=args.critical_speed,
                                   speed_range_mps=(low, high))
     out = report.to_dict()
+    if args.critical_speed and args.model == "2dof-free":
+        out["critical_speed_8dof_free"] = _eightdof_free(vehicle, law, args.speed_range_mps)
     if args.transfer_functions or args.bode or args.bode_plot:
         cl = linear.closed_loop(args.model, vehicle, law, speed)
         if args.transfer_functions:
@@ -118,4 +125,25 @@ def run(args: argparse.Namespace) -> int:
         lo, hi = out["critical_speed_search"]["searched_range_mps"]
         print("critical speed: " + (f"{cs:.3f} m/s ({cs * KMH_PER_MPS:.1f} km/h)" if cs
                                     is not None else f"none (stable {lo:g}-{hi:g} m/s)"))
+    if "critical_speed_8dof_free" in out:
+        free = out["critical_speed_8dof_free"]
+        cs = free["critical_speed_mps"]
+        what = (free["unavailable"] if free["unavailable"] else
+                f"{cs:.3f} m/s ({cs * KMH_PER_MPS:.1f} km/h)" if cs is not None else
+                f"none (stable {lo:g}-{hi:g} m/s)")
+        print(f"critical speed of the linearized 8-DOF with its steering system "
+              f"(8dof-free, Coulomb friction left out): {what}")
     return 0
+
+
+def _eightdof_free(vehicle: Any, law: Any, speed_range: list[float]) -> dict[str, Any]:
+    """The 8dof-free critical speed of the same car and law, or why it is unavailable."""
+    from fourws_analysis import free_control
+
+    try:
+        crit = free_control.eightdof_free_critical_speed(vehicle, law,
+                                                         speed_range_mps=tuple(speed_range))
+    except ParameterError as exc:
+        return {"critical_speed_mps": None, "unavailable": str(exc)}
+    return {**crit.to_dict(), "unavailable": None,
+            "coulomb_friction": "left out of the linearization (no small-signal form)"}

@@ -1,7 +1,8 @@
 """``fourws run [SCENARIO] [--law NAME ...] [--controller CMD] [--out DIR]``: run a scenario
 through the node graph.
 
-Every law of the scenario (or each ``--law``) is one run of the real ROS 2 graph -- simulator,
+Every law of the scenario (or each ``--law``) is one run of the real ROS 2 graph (a scenario
+with a ``series`` runs each member of the law's series, :mod:`fourws_run.series`) -- simulator,
 maneuver player, controller and recorder as separate processes on a ROS domain of their own
 -- recorded to a rosbag2 (MCAP) bag that the recorder checks for completeness. With
 ``--controller CMD`` (or a scenario's ``controller:``) your own controller node answers the
@@ -20,7 +21,9 @@ import argparse
 import dataclasses
 import shlex
 import sys
+import time
 from pathlib import Path
+from typing import Any
 
 HELP = "run a scenario (default: config/scenarios/default.yaml) through the ROS 2 node graph"
 
@@ -56,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
     from fourws_run.config import USER_LAW, ControllerSpec, RunConfig
     from fourws_run.record import EXIT_CODES, Outcome
     from fourws_run.scenario import load_scenario
+    from fourws_run.series import scenario_runs
     from fourws_sim.errors import ParameterError, UnknownNameError
 
     scenario = load_scenario(args.scenario)
@@ -84,13 +88,25 @@ def run(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else Path(scenario.recording.output_dir)
     records = []
     for law in laws:
-        config = RunConfig.from_scenario(scenario, law, controller)
-        name = args.name if args.name is None or len(laws) == 1 else f"{args.name}-{law}"
-        record = run_graph(config, out, run_name=name, overwrite=args.overwrite)
-        records.append(record)
-        print("\n".join(record.summary_lines()), flush=True)
-        if record.interrupted:
-            return EXIT_CODES[Outcome.INTERRUPTED]
+        # a series: every member is a run of its own (fourws_run.series)
+        members: list[Any] = [None]
+        if scenario.series is not None and controller.builtin:
+            members = scenario_runs(scenario, law)
+        elif isinstance(scenario.series, tuple):
+            members = list(scenario.series)  # a user controller: nothing found per law
+        elif scenario.series is not None:
+            raise ParameterError("series", "the regulation series is found per law (A of the "
+                                 "slowly increasing steer); a user controller (--controller) "
+                                 "has no law fourws can run offline: run its members as "
+                                 "maneuvers of their own")
+        for member in members:
+            config = RunConfig.from_scenario(scenario, law, controller, maneuver=member)
+            name = _run_name(args.name, scenario.name, law, member, len(laws) > 1)
+            record = run_graph(config, out, run_name=name, overwrite=args.overwrite)
+            records.append(record)
+            print("\n".join(record.summary_lines()), flush=True)
+            if record.interrupted:
+                return EXIT_CODES[Outcome.INTERRUPTED]
     bad = [r for r in records if not r.ok]
     print(f"fourws run: {len(records) - len(bad)}/{len(records)} runs ok; bags:")
     for r in records:
@@ -99,3 +115,16 @@ def run(args: argparse.Namespace) -> int:
     for r in bad:
         print(f"fourws run: {r.law} {r.outcome.value}: {r.reason}", file=sys.stderr)
     return max((r.exit_code for r in records), default=0) if bad else 0
+
+
+def _run_name(name: str | None, scenario: str, law: str, member: Any,
+              several_laws: bool) -> str | None:
+    """The run folder name: ``--name`` (with ``-<law>`` for several laws), or the default
+    ``<scenario>-<law>-<UTC time>`` of the graph run; a series member adds its maneuver's
+    name (``<scenario>-<law>-<member>-<UTC time>``)."""
+    if member is None:
+        return name if name is None or not several_laws else f"{name}-{law}"
+    stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
+    base = f"{scenario}-{law}" if name is None else (f"{name}-{law}" if several_laws
+                                                     else name)
+    return f"{base}-{member.name}" + ("" if name is not None else f"-{stamp}")

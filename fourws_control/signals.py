@@ -5,7 +5,10 @@ analytically the signals are found among the model's ``STATE``/``INPUT`` members
 (models name their components, ``docs/architecture.md``): a linear model (``matrices``), or the
 8-DOF, linearized numerically about straight running by :mod:`fourws_analysis.linearize`. A
 model whose roll angle is defined opposite to fourws' right-side-down convention declares
-``ROLL_SIGN = -1``; the map then flips the roll gains.
+``ROLL_SIGN = -1``; the map then flips the roll gains. A model whose front road-wheel angle is
+the state of a steering system under another name declares it (``FRONT_ANGLE_STATE``, the
+8-DOF with free steering: ``DELTA_S``): the law's front-angle gain sits on that state, as the
+free-control laws of the paper take the front angle state (ch. 3.4/4.4).
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ REAR_INPUT = "DELTA_R"
 LINEAR_MODELS = ("2dof", "2dof-free", "2dof-lagged", "3dof")
 #: Nonlinear models a law can be written for in the state order of their linearization
 #: (:func:`fourws_analysis.linearize.jacobians` about straight running).
-LINEARIZED_MODELS = ("8dof",)
+LINEARIZED_MODELS = ("8dof", "8dof-free")
 
 
 @dataclass(frozen=True)
@@ -117,7 +120,12 @@ def signal_map(model_name: str, module: ModuleType | None = None) -> SignalMap:
         raise IncompatibleError(f"model {model_name!r} has no rear-steer input {REAR_INPUT}")
     roll_sign = float(getattr(mod, "ROLL_SIGN", 1.0))
     positions: dict[Signal, tuple[str, int, float]] = {}
+    front_state = getattr(mod, "FRONT_ANGLE_STATE", None)
+    if front_state is not None:
+        positions[Signal.DELTA_F] = ("state", int(state[front_state]), 1.0)
     for sig, names in _NAMES.items():
+        if sig in positions:
+            continue
         sign = roll_sign if sig in (Signal.ROLL, Signal.ROLL_RATE) else 1.0
         idx = _find(state, names)
         if idx is not None:

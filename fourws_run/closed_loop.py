@@ -58,7 +58,7 @@ from fourws_run.ticks import (InputLimits, LockstepAnswers, TickEngine, law_inpu
                               whole_multiple)
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import FourwsError, ParameterError
-from fourws_sim.maneuvers import Maneuver, ManeuverSpec, make_maneuver
+from fourws_sim.maneuvers import Maneuver, ManeuverSpec, check_model, make_maneuver
 from fourws_sim.params import N_WHEELS, Vehicle
 from fourws_sim.simulator import Simulator
 
@@ -171,7 +171,9 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     Raises
     ------
     ParameterError
-        Non-positive periods, or a control period that is not a whole multiple of ``dt_s``.
+        Non-positive periods, a control period that is not a whole multiple of ``dt_s``, or a
+        maneuver that cannot steer the model (a torque input on a fixed-control model or an
+        angle input on a free one, :func:`fourws_sim.maneuvers.check_model`).
     UnknownNameError
         Unknown law, model or integrator.
     ParameterError
@@ -184,6 +186,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     whole_multiple(control_period_s, dt_s, "control_period_s")
     belief = vehicle if belief_vehicle is None else belief_vehicle
     man = maneuver if isinstance(maneuver, Maneuver) else make_maneuver(maneuver, vehicle)
+    check_model(man.spec, model)
 
     sim = Simulator(vehicle, model=model, integrator=integrator, dt_s=dt_s, tire=tire)
     sim.reset(speed_mps=man.initial_speed_mps)

@@ -183,11 +183,13 @@ class RunConfig:
     # ------------------------------------------------------------------ building
     @classmethod
     def from_scenario(cls, scenario: Any, law: str,
-                      controller: ControllerSpec | None = None) -> "RunConfig":
+                      controller: ControllerSpec | None = None,
+                      maneuver: ManeuverSpec | None = None) -> "RunConfig":
         """The run of ``scenario`` with ``law`` (or ``controller``, the user's): what
-        :meth:`fourws_run.scenario.Scenario.run_config` builds (a step steer to a target
-        lateral acceleration is resolved for the law there)."""
-        return scenario.run_config(law, controller)
+        :meth:`fourws_run.scenario.Scenario.run_config` builds (a maneuver that depends on the
+        law is resolved for it there; ``maneuver``, a member of the scenario's series, runs
+        instead of its maneuver)."""
+        return scenario.run_config(law, controller, maneuver)
 
     # ------------------------------------------------------------------ serializing
     def to_dict(self) -> dict[str, Any]:

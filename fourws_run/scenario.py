@@ -26,6 +26,10 @@ A scenario file (``config/scenarios/<name>.yaml``)::
     controller:                   # optional: your own controller node instead of fourws's
       command: [python3, my_controller.py]   # started with the run's ROS environment
       name: fourws_controller     # its ROS node name (the launcher remaps it to this)
+    road_friction_coefficient: 0.5   # optional: the road's friction, replacing the vehicle
+                                  # file's tire.friction_coefficient (a test surface)
+    series: regulation            # optional: several maneuvers per law, see fourws_run.series
+                                  # ("regulation", or a list of maneuver-field mappings)
 
 :func:`load_scenario` validates everything it can without building the run: names of the model,
 tire, integrator and laws are checked against their registries, the maneuver is loaded and
@@ -45,11 +49,13 @@ from typing import Any, Mapping
 from fourws_control.registry import LAWS
 from fourws_run import interface
 from fourws_run.config import ControllerSpec, RunConfig, software_versions
+from fourws_run.series import check_series
 from fourws_run.step_target import scenario_for_law
 from fourws_run.ticks import whole_multiple
 from fourws_sim.errors import ParameterError, UnknownNameError, describe
 from fourws_sim.integrators import INTEGRATORS
-from fourws_sim.maneuvers import (ManeuverSpec, check_sampling, load_maneuver_spec,
+from fourws_sim.maneuvers import (ManeuverSpec, check_model, check_sampling,
+                                  load_maneuver_spec,
                                   maneuver_spec_from_mapping)
 from fourws_sim.models import MODELS
 from fourws_sim.params import (CONFIG_DIR, UNCHECKED_KEY, Tire, Vehicle, available_configs,
@@ -122,16 +128,23 @@ class Scenario:
     recording: RecordingSpec = field(default_factory=RecordingSpec)
     controller: ControllerSpec = field(default_factory=ControllerSpec)
     description: str = ""
+    road_friction_coefficient: float | None = None
+    series: str | tuple[ManeuverSpec, ...] | None = None
     source: str = field(default="", compare=False)
     unchecked_fields: frozenset[str] = frozenset()
 
     def build_vehicle(self) -> Vehicle:
-        """The simulated vehicle, with the tire override applied."""
+        """The simulated vehicle, with the tire-model and road-friction overrides applied."""
         vehicle = load_vehicle(self.vehicle)
-        if self.tire is None:
+        if self.tire is None and self.road_friction_coefficient is None:
             return vehicle
         tire = vehicle.tire if vehicle.tire is not None else Tire()
-        return dataclasses.replace(vehicle, tire=dataclasses.replace(tire, model=self.tire))
+        if self.tire is not None:
+            tire = dataclasses.replace(tire, model=self.tire)
+        if self.road_friction_coefficient is not None:
+            tire = dataclasses.replace(tire,
+                                       friction_coefficient=self.road_friction_coefficient)
+        return dataclasses.replace(vehicle, tire=tire)
 
     def build_belief(self, simulated: Vehicle) -> Vehicle:
         """The controllers' belief vehicle for the simulated vehicle ``simulated``."""
@@ -144,19 +157,22 @@ class Scenario:
         once per state period. The law is built for this period."""
         return self.control_period_s if self.clock_mode == "lockstep" else self.state_period_s
 
-    def run_config(self, law: str, controller: ControllerSpec | None = None) -> RunConfig:
+    def run_config(self, law: str, controller: ControllerSpec | None = None,
+                   maneuver: ManeuverSpec | None = None) -> RunConfig:
         """The run of this scenario with ``law`` (or ``controller``, the user's), as the graph
-        and the offline twin both run it. A step steer to a target lateral acceleration gets
-        the amplitude that reaches it with this law
-        (:func:`fourws_run.step_target.scenario_for_law`).
+        and the offline twin both run it. A maneuver that depends on the law (a step steer to
+        a target lateral acceleration, a sine with dwell in multiples of A) is resolved for it
+        (:func:`fourws_run.step_target.scenario_for_law`). ``maneuver`` runs instead of the
+        scenario's (a member of its series, :func:`fourws_run.series.scenario_runs`).
 
         Raises
         ------
         ParameterError
-            The step target cannot be reached with the law.
+            The maneuver cannot be resolved with the law.
         """
         ctrl = controller if controller is not None else self.controller
-        scenario = scenario_for_law(self, law) if ctrl.builtin else self
+        scenario = self if maneuver is None else dataclasses.replace(self, maneuver=maneuver)
+        scenario = scenario_for_law(scenario, law) if ctrl.builtin else scenario
         vehicle = scenario.build_vehicle()
         rec = scenario.recording
         recorded: tuple[str, ...] = ()
@@ -197,13 +213,17 @@ class Scenario:
                           else list(rec.topics)},
             "controller": {"command": list(self.controller.command),
                            "name": self.controller.node_name},
+            "road_friction_coefficient": self.road_friction_coefficient,
+            "series": (self.series if self.series is None or isinstance(self.series, str)
+                       else [m.to_dict() for m in self.series]),
             **extra,
         }
 
 
 _FIELDS = ("name", "description", "vehicle", "maneuver", "laws", "law_options", "model", "tire",
            "integrator", "clock_mode", "integration_step_s", "control_period_s",
-           "state_period_s", "belief", "recording", "controller", UNCHECKED_KEY)
+           "state_period_s", "belief", "recording", "controller", "road_friction_coefficient",
+           "series", UNCHECKED_KEY)
 
 
 def _number(data: Mapping[str, Any], key: str, default: float, source: str,
@@ -311,6 +331,7 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     model = _string(data, "model", "8dof", source)
     if model not in _known_models():
         raise UnknownNameError("model", str(model), _known_models(), source)
+    check_model(maneuver, str(model), source)
     tire = _string(data, "tire", None, source, allow_none=True)
     if tire is not None and tire not in TIRES:
         raise UnknownNameError("tire", tire, list(TIRES), source)
@@ -375,13 +396,18 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
         topics = tuple(topics)
 
     controller = ControllerSpec.from_mapping(data.get("controller"), source)
+    friction = data.get("road_friction_coefficient")
+    if friction is not None:
+        friction = _number(data, "road_friction_coefficient", 1.0, source)
+    series = check_series(data.get("series"), maneuver, source)
     return Scenario(
         name=str(name), vehicle=str(vehicle), maneuver=maneuver, laws=tuple(laws_data),
         law_options={k: dict(v) for k, v in law_options.items()}, model=str(model), tire=tire,
         integrator=str(integrator), clock_mode=str(clock), integration_step_s=step,
         control_period_s=control, state_period_s=state, belief=belief,
         recording=RecordingSpec(enabled, str(output_dir), topics), controller=controller,
-        description=description, source=source, unchecked_fields=unchecked)
+        description=description, road_friction_coefficient=friction, series=series,
+        source=source, unchecked_fields=unchecked)
 
 
 def available_scenarios() -> list[str]:

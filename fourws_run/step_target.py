@@ -1,4 +1,5 @@
-"""ISO 7401 step steer at a target steady lateral acceleration: the amplitude per law.
+"""ISO 7401 step steer at a target steady lateral acceleration: the amplitude per law; and
+the dispatch of every maneuver that depends on the law (:data:`LAW_DEPENDENT`).
 
 ISO 7401 runs the step at a lateral acceleration (e.g. 4 m/s^2), not at an angle, so laws that
 need different steer for it are compared at equal lateral acceleration. A ``step_steer`` with
@@ -19,7 +20,8 @@ import numpy as np
 
 from fourws_run.closed_loop import ClosedLoopResult, run_closed_loop
 from fourws_sim.errors import ParameterError
-from fourws_sim.maneuvers import ManeuverSpec
+from fourws_run.reference_amplitude import resolve_reference_amplitude
+from fourws_sim.maneuvers import ManeuverSpec, SineWithDwellParams, StepSteerParams
 
 #: The amplitude search stops when the steady |a_y| is within this fraction of the target
 #: (ISO 7401 asks for the lateral acceleration within a tolerance of the nominal value; 0.5 %
@@ -142,10 +144,30 @@ def steady_lateral_accel(result: ClosedLoopResult,
     return float(np.mean(result["lateral_accel_mps2"][t >= t[-1] - window_s]))
 
 
-def resolve_maneuver_for_law(scenario: Any, law: str) -> ManeuverSpec:
-    """The scenario's maneuver as it runs with ``law``: a ``step_steer`` with
-    ``target_lateral_accel_mps2`` gets the amplitude that reaches that steady lateral
-    acceleration with this law; any other maneuver is returned unchanged.
+def resolve_maneuver_for_law(scenario: Any, law: str,
+                             spec: ManeuverSpec | None = None) -> ManeuverSpec:
+    """The scenario's maneuver (or ``spec``, e.g. a member of its series) as it runs with
+    ``law``: what depends on the law is found with the offline twin of the run by the
+    maneuver type's resolver (:data:`LAW_DEPENDENT`, by parameter class): a ``step_steer``
+    with ``target_lateral_accel_mps2`` gets the amplitude that reaches that steady lateral
+    acceleration (:func:`resolve_step_target`), a ``sine_with_dwell`` given as a multiple of
+    A gets A (:func:`fourws_run.reference_amplitude.resolve_reference_amplitude`); any other
+    maneuver is returned unchanged.
+
+    Raises
+    ------
+    ParameterError
+        The resolver's (see there).
+    """
+    spec = scenario.maneuver if spec is None else spec
+    resolver = LAW_DEPENDENT.get(type(spec.params))
+    return spec if resolver is None else resolver(scenario, law, spec)
+
+
+def resolve_step_target(scenario: Any, law: str, spec: ManeuverSpec) -> ManeuverSpec:
+    """A step steer with ``target_lateral_accel_mps2``, resolved for ``law``: the amplitude
+    that reaches that steady lateral acceleration with this law; a step without a target, or
+    already resolved for ``law``, is returned unchanged.
 
     The amplitude is found by :func:`find_step_amplitude` on the offline twin of the run
     (:func:`run_closed_loop` with the scenario's vehicle, model, belief, law options,
@@ -162,10 +184,8 @@ def resolve_maneuver_for_law(scenario: Any, law: str) -> ManeuverSpec:
         Initial speed 0, a hold shorter than twice the steady window, or a target that is
         not reached (see :func:`find_step_amplitude`).
     """
-    spec = scenario.maneuver
     p = spec.params
-    if spec.type != "step_steer" or p.target_lateral_accel_mps2 is None \
-            or p.amplitude_law == law:
+    if p.target_lateral_accel_mps2 is None or p.amplitude_law == law:
         return spec
     where = spec.source or spec.name
     speed = spec.initial_speed_mps
@@ -218,6 +238,13 @@ def resolve_maneuver_for_law(scenario: Any, law: str) -> ManeuverSpec:
         amplitude_lateral_accel_mps2=found.lateral_accel_mps2))
 
 
+#: Maneuver parameter class -> how a maneuver of that class is resolved for a law.
+LAW_DEPENDENT: dict[type, Callable[[Any, str, ManeuverSpec], ManeuverSpec]] = {
+    StepSteerParams: resolve_step_target,
+    SineWithDwellParams: resolve_reference_amplitude,
+}
+
+
 def scenario_for_law(scenario: Any, law: str) -> Any:
     """``scenario`` with its maneuver resolved for ``law`` (:func:`resolve_maneuver_for_law`);
     the same object when there is nothing to resolve. Call it where a law's run is prepared
@@ -227,5 +254,6 @@ def scenario_for_law(scenario: Any, law: str) -> Any:
                                                                           maneuver=spec)
 
 
-__all__ = ["AmplitudeSearch", "STEADY_WINDOW_S", "TARGET_ACCEL_RTOL", "find_step_amplitude",
-           "resolve_maneuver_for_law", "scenario_for_law", "steady_lateral_accel"]
+__all__ = ["AmplitudeSearch", "LAW_DEPENDENT", "STEADY_WINDOW_S", "TARGET_ACCEL_RTOL",
+           "find_step_amplitude", "resolve_maneuver_for_law", "resolve_step_target",
+           "scenario_for_law", "steady_lateral_accel"]

@@ -308,7 +308,16 @@ class Roll:
 
 @dataclass(frozen=True)
 class Steering:
-    """Steering system: ratio, and the free-control first-order dynamics (ch. 3.4/4.4)."""
+    """Steering system: ratio, and the free-control dynamics (ch. 3.4/4.4).
+
+    The 2-DOF free-control model (``2dof-free``) is the paper's first-order system: damping
+    and trail only, the trail standing for caster plus pneumatic trail (its tire has no
+    aligning moment). The 8-DOF's free steering system (``8dof-free``) adds the inertia and
+    the Coulomb friction; there ``trail_m`` is the caster (mechanical) trail alone, since the
+    tire model gives the aligning moment of the pneumatic trail (a linear tire gives none, so
+    there it is the whole trail again). Torques and the inertia are about the kingpins (the
+    road-wheel level); the driver's steering-wheel torque acts through ``ratio``.
+    """
 
     ratio: float = _spec(doc="steering-wheel angle per front road-wheel angle",
                          bounds=(1.0, 50.0))
@@ -317,6 +326,15 @@ class Steering:
                                        bounds=(0.0, 1e5))
     trail_m: float = _spec("nonnegative", default=0.0, doc="eta, caster/pneumatic trail",
                            bounds=(0.0, 0.5))
+    # a heavy truck's steering system: ratio 25, 0.1 kg m^2 of wheel and column -> 60 kg m^2
+    # about the kingpins plus its wheels; 5 N m of friction at its wheel -> 125 N m
+    inertia_kgm2: float = _spec("nonnegative", default=0.0,
+                                doc="J, inertia about the kingpins incl. ratio^2 x steering "
+                                    "wheel (0 = no 8-DOF steering system)",
+                                bounds=(0.0, 1e3))
+    coulomb_friction_nm: float = _spec("nonnegative", default=0.0,
+                                       doc="T_c, Coulomb friction about the kingpins",
+                                       bounds=(0.0, 1e4))
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,9 @@ from fourws_sim.params import N_WHEELS, Vehicle, load_vehicle
 DEFAULT_LINEAR_SPEED_MPS = 85.0 / 3.6
 #: Name of the nonlinear model that runs through compiled kernels.
 EIGHT_DOF = "8dof"
+#: The same model with its free steering system (the front angle a state, driven by the
+#: driver's steering torque).
+EIGHT_DOF_FREE = "8dof-free"
 #: dtype of the input vectors the compiled kernels take without conversion.
 _FLOAT64 = np.dtype(np.float64)
 
@@ -54,7 +57,9 @@ class Inputs:
     rear_wheel_angle_rad : float
         Commanded rear road-wheel angle, rad.
     steering_torque_nm : float
-        Driver torque for free-control models, N m.
+        Driver torque on the steering wheel for the free-control models, N m (``8dof-free``
+        takes it through the steering ratio in its steering system; for ``2dof-free``, whose
+        input is the torque about the kingpin, it is multiplied by the ratio here).
     drive_torque_nm : sequence of 4 float
         Drive torque per wheel, N m (positive forward).
     brake_torque_nm : sequence of 4 float
@@ -124,7 +129,7 @@ class Simulator:
         if not (isinstance(dt_s, (int, float)) and math.isfinite(dt_s) and dt_s > 0.0):
             raise ParameterError("dt_s", f"must be a finite number > 0, got {dt_s!r}")
         self.dt_s = float(dt_s)
-        self._is_8dof = model == EIGHT_DOF
+        self._is_8dof = model in (EIGHT_DOF, EIGHT_DOF_FREE)
         self._n_input = len(self.model.INPUT)
         self._u = np.zeros(self._n_input)
         self._u_shape = (self._n_input,)
@@ -133,7 +138,8 @@ class Simulator:
         if self._is_8dof:
             from fourws_sim.models import eightdof
 
-            self._p = eightdof.params_for(self.vehicle, tire)
+            self._p = eightdof.params_for(self.vehicle, tire,
+                                          free_steering=model == EIGHT_DOF_FREE)
             # a wheel too light for the step is refused here, not found diverging later
             eightdof.check_step(self._p, self.dt_s, integrator,
                                 self.vehicle.source or self.vehicle.name)
@@ -152,9 +158,11 @@ class Simulator:
         else:
             self._brakes = None
             if tire is not None:
-                raise ParameterError("tire", f"only the {EIGHT_DOF} model has a tire choice")
+                raise ParameterError("tire", f"only the {EIGHT_DOF} models have a tire choice")
             self._input_names = [m.name for m in self.model.INPUT]
         self._speed = 0.0
+        self._kingpin_per_wheel = (self.vehicle.steering.ratio
+                                   if self.vehicle.steering is not None else 1.0)
         self.reset(speed_mps=speed_mps)
 
     # ------------------------------------------------------------------ state
@@ -267,8 +275,10 @@ class Simulator:
                 arr[member] = u.front_wheel_angle_rad
             elif name == "DELTA_R":
                 arr[member] = u.rear_wheel_angle_rad
-            elif name in ("T_F", "STEER_TORQUE"):
+            elif name == "STEER_TORQUE":
                 arr[member] = u.steering_torque_nm
+            elif name == "T_F":  # the 2-DOF free model's kingpin torque: through the ratio
+                arr[member] = u.steering_torque_nm * self._kingpin_per_wheel
             elif name.startswith("DRIVE_"):
                 arr[member] = drive[("FL", "FR", "RL", "RR").index(name[-2:])]
             elif name.startswith("BRAKE_"):

@@ -400,9 +400,12 @@ def classify_node(node: str, params_file: Path, env: dict[str, str],
 # --------------------------------------------------------------------------- targets
 
 def _nominal_outputs(speed_mps: float) -> dict[str, float]:
+    # the VehicleState fields a maneuver reads (a torque-input maneuver reports the applied
+    # front angle as the steering system's angle)
     return {"speed_mps": speed_mps, "x_m": 0.0, "y_m": 0.0, "heading_rad": 0.0,
             "yaw_rate_radps": 0.0, "sideslip_rad": 0.0, "lateral_accel_mps2": 0.0,
-            "lateral_velocity_mps": 0.0, "roll_rad": 0.0, "roll_rate_radps": 0.0}
+            "lateral_velocity_mps": 0.0, "roll_rad": 0.0, "roll_rate_radps": 0.0,
+            "front_wheel_angle_rad": 0.0}
 
 
 def vehicle_target(path: Path) -> Any:

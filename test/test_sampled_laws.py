@@ -149,7 +149,8 @@ def test_eightdof_closed_loop_is_the_law_gains_on_the_linearization(law: str) ->
     matrices are built here from the finite-difference Jacobians at straight running and
     the law's gain vector in Signal order, each gain put on the 8-DOF state of the same
     meaning (delta_r = k_delta delta_f + k_r R + k_phi PHI + k_p P + k_V V), the earth-frame
-    position left out (nothing depends on it: zero columns). eightdof_linear_system (A, B, the rear-command output)
+    position and the idle free-steering states left out (nothing depends on them: zero
+    columns). eightdof_linear_system (A, B, the rear-command output)
     and eightdof_sampled_loop (the zero-order-hold transition matrix) must equal them to the
     last bit (the same floating-point operations), at a walking-pace-faded and two driving
     speeds."""
@@ -170,8 +171,11 @@ def test_eightdof_closed_loop_is_the_law_gains_on_the_linearization(law: str) ->
         k_x[s.P], k_x[s.V] = k[Signal.ROLL_RATE], k[Signal.LATERAL_VELOCITY]
         a_cl = a + np.outer(b[:, i.DELTA_R], k_x)
         b_cl = b[:, i.DELTA_F] + b[:, i.DELTA_R] * k[Signal.DELTA_F]
-        keep = [j for j in range(len(s)) if j not in (s.X, s.Y)]
-        assert np.all(a_cl[:, [s.X, s.Y]] == 0.0)
+        # the earth-frame position, and with fixed steering control the free steering
+        # system's two states (they stay 0), drive nothing
+        idle = (s.X, s.Y, s.DELTA_S, s.DELTA_S_RATE)
+        keep = [j for j in range(len(s)) if j not in idle]
+        assert np.all(a_cl[:, list(idle)] == 0.0)
         assert np.all(np.any(a_cl[:, keep] != 0.0, axis=0))
 
         system = eightdof_linear_system(car, speed, law_obj)

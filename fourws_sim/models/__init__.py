@@ -24,7 +24,12 @@ MODELS: dict[str, str] = {
     "3dof": "fourws_sim.models.roll3dof",
     "2dof-cubic": "fourws_sim.models.cubic2dof",
     "8dof": "fourws_sim.models.eightdof",
+    "8dof-free": "fourws_sim.models.eightdof_free",
 }
+
+#: Models whose front angle is a state of a steering system driven by the driver's torque
+#: (free steering control): they take torque-input maneuvers, the others angle inputs.
+FREE_STEERING_MODELS = ("2dof-free", "8dof-free")
 
 
 def get_model(name: str) -> ModuleType:

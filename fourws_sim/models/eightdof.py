@@ -120,6 +120,47 @@ Loads are clamped at 0 (a lifted wheel has no force).
 Rolling resistance (``tire.rolling_resistance`` :math:`f_r`, default 0) is a torque
 :math:`f_r F_z R` opposing wheel spin (part of the stick-slip friction torque above).
 
+Free steering system (model ``8dof-free``)
+------------------------------------------
+With fixed steering control (model ``8dof``, the paper's ch. 8) the front command is an input
+and the two steering states ``DELTA_S``, ``DELTA_S_RATE`` stay 0 (derivatives exactly 0: the
+results are those of the model without them). With free control (``params_for(...,
+free_steering=True)``, model ``8dof-free``) the front road-wheel angle is the state
+:math:`\delta_s` of a steering system: both front wheels turn about their kingpins, rigidly
+linked to the steering wheel through the steering ratio N (:math:`\delta_H = N\delta_s`; no
+column or rack compliance), and the input ``DELTA_F`` is not used. Re-derived for fourws from
+the paper's free-control model (eq. 3.18/4.53, after Whitehead) with the inertia it leaves out
+(it assumes the system "highly damped", so first order):
+
+.. math::
+
+    J\,\ddot\delta_s = N T_H + \sum_{i = FL, FR} \left(M_{z,i} - e\,F_{y,i}\right)
+        - \nu\,\dot\delta_s - T_{fric},
+    \qquad \delta_f = \delta_s + \varepsilon_f\phi .
+
+:math:`J` is the inertia of the system about the kingpins (wheels, tie rods, rack, plus
+:math:`N^2` times the steering wheel and column: the kinetic energy
+:math:`\tfrac12 J\dot\delta_s^2`), :math:`T_H` the driver's torque on the steering wheel
+(input ``STEER_TORQUE``; its virtual work on :math:`\delta_H = N\delta_s` makes it
+:math:`N T_H` about the kingpins), :math:`\nu` the viscous damping about the kingpins (the
+paper's :math:`\nu`). The returning torque of each front tire: its tire-frame lateral force
+acts at the contact centre, the caster trail :math:`e` behind the point where the kingpin axis
+meets the ground, so its moment about the kingpin (z up) is :math:`-e F_y` -- a force to the
+left behind the axis turns the wheel to the right; the tire's aligning moment :math:`M_z`
+(pneumatic trail, from the tire model) adds. Left out, as in the paper: kingpin inclination
+and the caster's weight-lift torque, the moments of the longitudinal forces on the scrub
+radius, the wheels' gyroscopic torques. The Coulomb friction :math:`T_{fric}` of capacity
+:math:`T_c` (rack, column) takes the stick-slip form of the wheels above (stuck band
+:math:`J|\dot\delta_s| < T_c\tau_b`). For :math:`J \to 0`, :math:`T_c = 0` and a tire without
+aligning moment this is eq. 4.53, :math:`\nu\dot\delta_f = T_f - \eta F_{yf}`, with
+:math:`T_f = N T_H`, :math:`\eta = e` and :math:`F_{yf}` the front axle's force
+(:mod:`fourws_sim.models.free2dof`). Parameters: ``steering.inertia_kgm2``,
+``damping_nms_per_rad``, ``trail_m`` (in the 8-DOF the caster trail only: the tire model gives
+the pneumatic trail), ``coulomb_friction_nm``, ``ratio``. The sub-step rate includes the
+system's fastest rate (``PARAM.RATE_S``: :math:`\nu/J`, :math:`\sqrt{k/J}` with the returning
+stiffness :math:`k = 2(\partial M_z/\partial\alpha - e\,\partial F_y/\partial\alpha)` of the
+front tires at their static load, and :math:`1/\tau_b` with friction).
+
 Two implementations: :func:`derivatives` is the readable NumPy reference (the model contract);
 :func:`kernels_for` gives the numba-compiled right-hand side and fixed-step integrator loops
 for one tire function, which :mod:`fourws_sim.simulator` uses. ``test/test_eightdof.py`` checks
@@ -161,14 +202,17 @@ class STATE(IntEnum):
     ALPHA_FR = 15  #: lagged slip angle front right, rad
     ALPHA_RL = 16  #: lagged slip angle rear left, rad
     ALPHA_RR = 17  #: lagged slip angle rear right, rad
+    DELTA_S = 18  #: front road-wheel angle of the free steering system (8dof-free), rad
+    DELTA_S_RATE = 19  #: its rate, rad/s (both stay 0 with fixed steering control)
 
 
 class INPUT(IntEnum):
     """Input components of the 8-DOF model (SI units)."""
 
     DELTA_F = 0  #: commanded front road-wheel angle (steering-wheel angle / ratio), rad
+    #: (fixed steering control; unused by the free steering system)
     DELTA_R = 1  #: commanded rear road-wheel angle, rad
-    STEER_TORQUE = 2  #: driver steering torque, N m (unused: fixed steering control)
+    STEER_TORQUE = 2  #: driver torque on the steering wheel, N m (free steering system only)
     DRIVE_FL = 3  #: drive torque front left, N m (positive forward)
     DRIVE_FR = 4  #: drive torque front right, N m
     DRIVE_RL = 5  #: drive torque rear left, N m
@@ -213,6 +257,13 @@ class PARAM(IntEnum):
     TAU_B = 28  #: brake hold time constant, s
     G = 29  #: gravity, m/s^2
     K_SPIN = 30  #: wheel-spin slip stiffness R^2 C_s / I_w (rate x slip denominator), m/s^2
+    STEER_FREE = 31  #: 1.0: the free steering system drives the front angle; 0.0: fixed control
+    J_S = 32  #: steering-system inertia about the kingpins (road-wheel level), kg m^2
+    NU_S = 33  #: steering viscous damping about the kingpins, N m s/rad
+    E_S = 34  #: caster (mechanical) trail, m
+    TC_S = 35  #: steering Coulomb friction about the kingpins, N m
+    N_S = 36  #: steering ratio (steering-wheel angle per road-wheel angle)
+    RATE_S = 37  #: fastest steering-system rate, 1/s (sub-steps; 0 with fixed control)
 
 
 N_STATE = len(STATE)
@@ -321,6 +372,11 @@ class Params:
     def __getitem__(self, key: PARAM) -> float:
         return float(self.arr[key])
 
+    @property
+    def free_steering(self) -> bool:
+        """The free steering system drives the front angle (model ``8dof-free``)."""
+        return bool(self.arr[PARAM.STEER_FREE] > 0.0)
+
 
 def road_wheel_angle(steering_wheel_angle_rad: float, vehicle: Vehicle) -> float:
     """Front road-wheel angle in rad from the steering-wheel angle in rad (eq. 8.32).
@@ -352,7 +408,7 @@ def _tire_module(vehicle: Vehicle, tire: str | None) -> tuple[str, ModuleType]:
 
 
 def params_for(vehicle: Vehicle, tire: str | None = None, *,
-               v_min_mps: float | None = None) -> Params:
+               v_min_mps: float | None = None, free_steering: bool = False) -> Params:
     """Build the 8-DOF parameters of ``vehicle``.
 
     Parameters
@@ -365,11 +421,16 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
         Slip-denominator floor in m/s (default :data:`V_MIN_DEFAULT_MPS`): the speed below
         which both slips are regularized. It does not depend on the wheels or the step (a
         stiff wheel is integrated in sub-steps instead, see the module docstring).
+    free_steering : bool
+        The free steering system drives the front angle (model ``8dof-free``; needs
+        ``steering`` with ``inertia_kgm2 > 0``); False: fixed control, the steering states
+        stay 0.
 
     Raises
     ------
     ParameterError
-        If ``roll`` or ``body`` is missing, or ``v_min_mps`` is not finite and > 0.
+        If ``roll`` or ``body`` is missing, ``v_min_mps`` is not finite and > 0, or (free
+        steering) ``steering`` is missing or its inertia is 0.
     UnknownNameError
         If the tire model name is unknown.
     """
@@ -429,7 +490,48 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
         raise ParameterError("v_min_mps", f"must be finite and > 0, got {v_min_mps!r}")
     arr[P.V_MIN] = v_min_mps
     ratio = vehicle.steering.ratio if vehicle.steering is not None else 1.0
+    if free_steering:
+        _steering_parameters(arr, vehicle, module, coeffs_f)
     return Params(arr, coeffs_f, coeffs_r, tire_name, module, float(ratio))
+
+
+def _steering_parameters(arr: np.ndarray, vehicle: Vehicle, module: ModuleType,
+                         coeffs_f: np.ndarray) -> None:
+    """Fill the free steering system's slots of ``arr`` from ``vehicle.steering`` (see the
+    module docstring), with its fastest rate ``RATE_S`` for the sub-steps.
+
+    Raises
+    ------
+    ParameterError
+        No ``steering`` data, or its inertia is 0 (the system would have no dynamics of its
+        own: use the first-order 2dof-free model for that limit).
+    """
+    P = PARAM
+    where = vehicle.source or vehicle.name
+    vehicle.require("steering", user="8dof-free model (free steering system)")
+    st = vehicle.steering
+    assert st is not None
+    if not st.inertia_kgm2 > 0.0:
+        raise ParameterError("steering.inertia_kgm2", f"must be > 0 for the 8dof-free model "
+                             f"(the steering system's inertia), got {st.inertia_kgm2!r}", where)
+    arr[P.STEER_FREE] = 1.0
+    arr[P.J_S] = st.inertia_kgm2
+    arr[P.NU_S] = st.damping_nms_per_rad
+    arr[P.E_S] = st.trail_m
+    arr[P.TC_S] = st.coulomb_friction_nm
+    arr[P.N_S] = st.ratio
+    c = vehicle.chassis
+    fz = arr[P.M] * arr[P.G] * c.cg_to_rear_axle_m / (2.0 * c.wheelbase_m)  # static, per tire
+    h = 1.0e-5
+    fp = module.forces(fz, h, 0.0, 20.0, arr[P.MU], coeffs_f)
+    fm = module.forces(fz, -h, 0.0, 20.0, arr[P.MU], coeffs_f)
+    dfy = (fp[1] - fm[1]) / (2.0 * h)
+    dmz = (fp[2] - fm[2]) / (2.0 * h)
+    stiffness = max(2.0 * (dmz - st.trail_m * dfy), 0.0)  # returning torque per rad, N m
+    rates = [st.damping_nms_per_rad / st.inertia_kgm2, math.sqrt(stiffness / st.inertia_kgm2)]
+    if st.coulomb_friction_nm > 0.0:
+        rates.append(1.0 / arr[P.TAU_B])  # the stuck band's decay
+    arr[P.RATE_S] = max(rates)
 
 
 def _longitudinal_stiffness(module: ModuleType, coeffs: np.ndarray, fz: float,
@@ -475,7 +577,14 @@ def check_step(p: Params, dt_s: float, integrator: str = "rk4",
     """
     q = p.arr
     bound = rate_bound(integrator)
-    ratio = q[PARAM.K_SPIN] / q[PARAM.V_MIN] * dt_s / bound
+    steering = q[PARAM.RATE_S] * dt_s / bound
+    if not steering <= MAX_SUBSTEPS:
+        raise ParameterError(
+            "steering.inertia_kgm2",
+            f"{q[PARAM.J_S]:.3g} kg m^2 is too light for the integration step dt_s = "
+            f"{dt_s:g} s: the steering system's rate {q[PARAM.RATE_S]:.3g} 1/s would need "
+            f"{steering:.3g} {integrator} sub-steps per step (at most {MAX_SUBSTEPS})", source)
+    ratio = max(q[PARAM.K_SPIN] / q[PARAM.V_MIN] * dt_s / bound, steering)
     if ratio <= MAX_SUBSTEPS:  # False for NaN
         return max(1, int(math.ceil(ratio)))
     iw = q[PARAM.I_W]
@@ -510,6 +619,29 @@ def _solve_body(m: float, ms_h_c: float, iz: float, ixz: float, ix: float,
     vd = (fy + ms_h_c * pd) / m
     rd = (n + ixz * pd) / iz
     return vd, rd, pd
+
+
+def _steering_rates(rate: float, torque_nm: float, fy_front: np.ndarray, mz_front: np.ndarray,
+                    q: np.ndarray) -> tuple[float, float]:
+    """``(d delta_s/dt, d^2 delta_s/dt^2)`` of the free steering system (module docstring):
+    driver torque through the ratio, the front tires' aligning moments and lateral forces on
+    the caster trail, viscous damping, and the stick-slip Coulomb friction of the wheels'
+    form."""
+    P = PARAM
+    j, cap = q[P.J_S], q[P.TC_S]
+    t_other = (q[P.N_S] * torque_nm + float(np.sum(mz_front - q[P.E_S] * fy_front))
+               - q[P.NU_S] * rate)
+    if j * abs(rate) >= cap * q[P.TAU_B]:  # sliding: Coulomb friction opposes the rate
+        if rate > 0.0:
+            t_other -= cap
+        elif rate < 0.0:
+            t_other += cap
+        return rate, t_other / j
+    if abs(t_other) > cap:  # stuck band, breaking loose
+        return rate, (t_other - math.copysign(cap, t_other)) / j
+    if abs(rate) > HELD_SPIN_FLOOR_RADPS:  # held: the rate decays to zero
+        return rate, -rate / q[P.TAU_B] * (1.0 - abs(t_other) / cap)
+    return rate, 0.0
 
 
 def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndarray, Aux]:
@@ -548,7 +680,8 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     vmin = q[P.V_MIN]
 
     # road-wheel angles with roll steer (8.32, 8.33)
-    delta_f = u[I.DELTA_F] + q[P.EPS_F] * phi
+    free = q[P.STEER_FREE] > 0.0  # the steering system's angle replaces the command
+    delta_f = (x[S.DELTA_S] if free else u[I.DELTA_F]) + q[P.EPS_F] * phi
     delta_r = u[I.DELTA_R] + q[P.EPS_R] * phi
     delta = np.array([delta_f, delta_f, delta_r, delta_r])
 
@@ -585,6 +718,8 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     with np.errstate(divide="ignore"):  # 1/sigma only where sigma > 0
         lag_rate = np.where(lagged, den / sigma, 0.0)  # 1/s
     slip_rate = float(np.max(np.maximum(q[P.K_SPIN] / den, lag_rate)))
+    if free:
+        slip_rate = max(slip_rate, float(q[P.RATE_S]))
 
     fx = np.zeros(4)
     fy = np.zeros(4)
@@ -638,6 +773,9 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     dx[S.AX_LT] = (ax - ax_lt) / q[P.TAU_LT]
     dx[S.AY_LT] = (ay - ay_lt) / q[P.TAU_LT]
     dx[S.ALPHA_FL:S.ALPHA_RR + 1] = lag_rate * (alpha - alpha_lag)
+    if free:
+        dx[S.DELTA_S], dx[S.DELTA_S_RATE] = _steering_rates(
+            x[S.DELTA_S_RATE], u[I.STEER_TORQUE], fy[:2], mz[:2], q)
     aux = Aux(fz, alpha_tire.copy(), kappa, fx, fy, mz, float(delta_f), float(delta_r),
               float(ax), float(ay), slip_rate)
     return dx, aux

@@ -110,8 +110,10 @@ i_u, i_v, i_r, i_phi, i_p = (int(STATE.U), int(STATE.V), int(STATE.R), int(STATE
                              int(STATE.P))
 i_w0, i_x, i_y, i_psi = int(STATE.OMEGA_FL), int(STATE.X), int(STATE.Y), int(STATE.PSI)
 i_ax, i_ay, i_al0 = int(STATE.AX_LT), int(STATE.AY_LT), int(STATE.ALPHA_FL)
+i_ds, i_dsr = int(STATE.DELTA_S), int(STATE.DELTA_S_RATE)
 j_df, j_dr, j_d0, j_b0 = (int(INPUT.DELTA_F), int(INPUT.DELTA_R), int(INPUT.DRIVE_FL),
                           int(INPUT.BRAKE_FL))
+j_tq = int(INPUT.STEER_TORQUE)
 k_m, k_ms, k_iz, k_ix, k_ixz = (int(PARAM.M), int(PARAM.MS), int(PARAM.IZ), int(PARAM.IX),
                                 int(PARAM.IXZ))
 k_a, k_b, k_tf, k_tr, k_hcg = (int(PARAM.A), int(PARAM.B), int(PARAM.TF), int(PARAM.TR),
@@ -125,6 +127,9 @@ k_cf, k_cr, k_ef, k_er = (int(PARAM.C_PHI_F), int(PARAM.C_PHI_R), int(PARAM.EPS_
 k_mu, k_frr, k_sigf, k_sigr, k_vmin = (int(PARAM.MU), int(PARAM.F_RR), int(PARAM.SIGMA_F),
                                        int(PARAM.SIGMA_R), int(PARAM.V_MIN))
 k_tlt, k_tb, k_g, k_kspin = int(PARAM.TAU_LT), int(PARAM.TAU_B), int(PARAM.G), int(PARAM.K_SPIN)
+k_sfree, k_js, k_nus, k_es = (int(PARAM.STEER_FREE), int(PARAM.J_S), int(PARAM.NU_S),
+                              int(PARAM.E_S))
+k_tcs, k_ns, k_rates = int(PARAM.TC_S), int(PARAM.N_S), int(PARAM.RATE_S)
 a_fz, a_al, a_ka, a_fx, a_fy, a_mz = _AUX_FZ, _AUX_ALPHA, _AUX_KAPPA, _AUX_FX, _AUX_FY, _AUX_MZ
 HELD_FLOOR = float(HELD_SPIN_FLOOR_RADPS)
 a_df, a_dr, a_ax, a_ay, a_rate = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY, _AUX_RATE
@@ -212,7 +217,11 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     vmin = q[k_vmin]
     k_spin = q[k_kspin]
     mu = q[k_mu]
-    delta_f = u[j_df] + q[k_ef] * phi
+    free = q[k_sfree] > 0.0  # free steering system: its angle replaces the command
+    if free:
+        delta_f = x[i_ds] + q[k_ef] * phi
+    else:
+        delta_f = u[j_df] + q[k_ef] * phi
     delta_r = u[j_dr] + q[k_er] * phi
     ax_lt = x[i_ax]
     ay_lt = x[i_ay]
@@ -338,6 +347,35 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
             dx[i_w0 + i] = -om / q[k_tb] * (1.0 - abs(t_other) / cap)
         else:
             dx[i_w0 + i] = 0.0
+    if free:  # the steering system (eightdof docstring), stick-slip as the wheels above
+        rate_s = x[i_dsr]
+        e_s = q[k_es]
+        t_s = (q[k_ns] * u[j_tq] + ((aux[a_mz] - e_s * aux[a_fy])
+                                    + (aux[a_mz + 1] - e_s * aux[a_fy + 1]))
+               - q[k_nus] * rate_s)
+        cap_s = q[k_tcs]
+        j_s = q[k_js]
+        if j_s * abs(rate_s) >= cap_s * q[k_tb]:
+            if rate_s > 0.0:
+                t_s -= cap_s
+            elif rate_s < 0.0:
+                t_s += cap_s
+            acc_s = t_s / j_s
+        elif t_s > cap_s:
+            acc_s = (t_s - cap_s) / j_s
+        elif t_s < -cap_s:
+            acc_s = (t_s + cap_s) / j_s
+        elif abs(rate_s) > HELD_FLOOR:
+            acc_s = -rate_s / q[k_tb] * (1.0 - abs(t_s) / cap_s)
+        else:
+            acc_s = 0.0
+        dx[i_ds] = rate_s
+        dx[i_dsr] = acc_s
+        if q[k_rates] > rate:
+            rate = q[k_rates]
+    else:
+        dx[i_ds] = 0.0
+        dx[i_dsr] = 0.0
     c = math.cos(phi)
     s = math.sin(phi)
     msh = pt[_P_MSH]
