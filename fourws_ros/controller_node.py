@@ -52,7 +52,8 @@ from typing import Any
 from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetParametersResult)
 from rclpy.node import Node
 
-from fourws_ros import cdr, conversions, reporting, topics
+from fourws_ros import conversions, reporting, topics
+from fourws_run import codecs
 from fourws_run.ticks import StateGate, law_input
 from fourws_sim.errors import FourwsError, ParameterError
 
@@ -140,12 +141,12 @@ class ControllerNode(Node):
         self._recorder = reporting.RecorderWatch(self)
         self._closing = False
         self.finished = False  # run_node: stop spinning
-        # raw subscriptions + fourws_ros.cdr: the answer chain of lockstep runs stays short
+        # raw subscriptions + fourws_run.codecs: the answer chain of lockstep runs stays short
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                  self._on_state, topics.STREAM_QOS, raw=True)
         self.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
                                  self._on_driver, topics.STREAM_QOS, raw=True)
-        self._cmd_encoder = cdr.RearSteerCommandEncoder(topics.FRAME_BODY)
+        self._cmd_encoder = codecs.RearSteerCommandEncoder(topics.FRAME_BODY)
         self._state: Any = None
         self._state_rx = 0.0
         self._driver: dict[int, float] = {}  # stamp ns -> front road-wheel angle, rad
@@ -254,8 +255,8 @@ class ControllerNode(Node):
         if self._closing:
             return
         try:
-            state = cdr.parse_state(raw)
-        except cdr.CdrError as exc:
+            state = codecs.parse_state(raw)
+        except codecs.CodecError as exc:
             self.get_logger().error(f"ignored state: {exc}", throttle_duration_sec=1.0)
             return
         if not self.gate.admit(state["step"], state["sim_time_s"], state["stamp_ns"]):
@@ -268,8 +269,8 @@ class ControllerNode(Node):
 
     def _on_driver(self, raw: bytes) -> None:
         try:
-            key, cmd = cdr.parse_driver_input(raw)
-        except cdr.CdrError as exc:
+            key, cmd = codecs.parse_driver_input(raw)
+        except codecs.CodecError as exc:
             self.get_logger().error(f"ignored driver input: {exc}", throttle_duration_sec=1.0)
             return
         if not math.isfinite(cmd.front_wheel_angle_rad):

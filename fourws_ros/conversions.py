@@ -20,8 +20,10 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, NS_PER_S, STATE_SCALARS, STATE_WHEELS,
-                                  time_to_ns)
+from fourws_run.codecs import (IMU_FIELDS, ODOMETRY_FIELDS, check_finite_mapping, imu_values,
+                               odometry_values, outputs_finite)
+from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, N_WHEELS, NS_PER_S, STATE_SCALARS,
+                                  STATE_WHEELS, time_to_ns)
 from fourws_sim.errors import NonFiniteError
 
 
@@ -70,28 +72,6 @@ def stamp_to_ns(stamp: Any) -> int:
 
 
 # ---------------------------------------------------------------------------- state
-def outputs_finite(outputs: Mapping[str, Any]) -> str:
-    """Name of the first non-finite output field, or ``""`` if all are finite."""
-    # fast path: a sum is finite iff every term is (barring overflow, which is reported too)
-    total = 0.0
-    for key in STATE_SCALARS:
-        if key in outputs:
-            total += float(outputs[key])
-    for key in STATE_WHEELS:
-        if key in outputs:
-            value = outputs[key]
-            total += float(value.sum() if isinstance(value, np.ndarray) else sum(value))
-    if math.isfinite(total):
-        return ""
-    for key in STATE_SCALARS:
-        if key in outputs and not math.isfinite(float(outputs[key])):
-            return key
-    for key in STATE_WHEELS:
-        if key in outputs and not np.all(np.isfinite(np.asarray(outputs[key], float))):
-            return key
-    return ""
-
-
 def state_msg(outputs: Mapping[str, Any], *, time_s: float, step: int, model: str,
               msg: Any = None) -> Any:
     """``VehicleState`` from ``Simulator.outputs()``.
@@ -177,15 +157,6 @@ def driver_command(msg: Any) -> Any:
     return cmd
 
 
-def check_finite_mapping(values: Mapping[str, Any], what: str) -> None:
-    """Raise :class:`NonFiniteError` naming the first non-finite field of ``values``."""
-    for key, value in values.items():
-        if isinstance(value, str):
-            continue
-        if not np.all(np.isfinite(np.asarray(value, dtype=np.float64))):
-            raise NonFiniteError(f"{what}: field {key} is not finite ({value!r})")
-
-
 # ---------------------------------------------------------------------------- rear steer
 def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state_stamp_ns: int,
                  state_step: int, msg: Any = None) -> Any:
@@ -208,59 +179,49 @@ def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state_stamp_ns: 
 
 
 # ---------------------------------------------------------------------------- standard msgs
-def _quaternion_from_euler(roll: float, pitch: float, yaw: float) -> tuple[float, ...]:
-    """(x, y, z, w) of the rotation R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
+class _StateFields:
+    """A ``VehicleState`` read like an outputs mapping (``get``), for the value functions of
+    :mod:`fourws_run.codecs`."""
+
+    def __init__(self, state: Any) -> None:
+        self._state = state
+
+    def get(self, key: str) -> Any:
+        return getattr(self._state, key, None)
+
+
+def _set_fields(msg: Any, names: tuple[str, ...], values: tuple[float, ...]) -> None:
+    """Set the dotted fields ``names`` of ``msg`` to ``values``."""
+    for name, value in zip(names, values):
+        *path, last = name.split(".")
+        target = msg
+        for part in path:
+            target = getattr(target, part)
+        setattr(target, last, value)
 
 
 def odometry_msg(state: Any, msg: Any = None) -> Any:
-    """``nav_msgs/Odometry`` of the body (``base_link``) in ``odom`` from a ``VehicleState``.
-
-    Roll enters the orientation (REP-103 roll about +x: positive roll lowers the right side,
-    which is the fourws sign convention).
-    """
+    """``nav_msgs/Odometry`` of the body (``base_link``) in ``odom`` from a ``VehicleState``
+    (the fields of :func:`fourws_run.codecs.odometry_values`)."""
     from nav_msgs.msg import Odometry
 
     m = Odometry() if msg is None else msg
     m.header.stamp = state.header.stamp
     m.header.frame_id = FRAME_ODOM
     m.child_frame_id = FRAME_BODY
-    m.pose.pose.position.x = float(state.x_m)
-    m.pose.pose.position.y = float(state.y_m)
-    q = _quaternion_from_euler(float(state.roll_rad), 0.0, float(state.heading_rad))
-    o = m.pose.pose.orientation
-    o.x, o.y, o.z, o.w = q
-    m.twist.twist.linear.x = float(state.speed_mps)
-    m.twist.twist.linear.y = float(state.lateral_velocity_mps)
-    m.twist.twist.angular.x = float(state.roll_rate_radps)
-    m.twist.twist.angular.z = float(state.yaw_rate_radps)
+    _set_fields(m, ODOMETRY_FIELDS, odometry_values(_StateFields(state)))
     return m
 
 
 def imu_msg(state: Any, msg: Any = None) -> Any:
-    """``sensor_msgs/Imu`` at the CG from a ``VehicleState``.
-
-    Linear acceleration is the specific force an IMU measures (REP-145): the body-frame
-    accelerations plus gravity on +z (the small roll tilt of gravity is neglected).
-    """
-    from fourws_sim.params import GRAVITY_MPS2
+    """``sensor_msgs/Imu`` at the CG from a ``VehicleState`` (the fields of
+    :func:`fourws_run.codecs.imu_values`)."""
     from sensor_msgs.msg import Imu
 
     m = Imu() if msg is None else msg
     m.header.stamp = state.header.stamp
     m.header.frame_id = FRAME_BODY
-    q = _quaternion_from_euler(float(state.roll_rad), 0.0, float(state.heading_rad))
-    o = m.orientation
-    o.x, o.y, o.z, o.w = q
-    m.angular_velocity.x = float(state.roll_rate_radps)
-    m.angular_velocity.z = float(state.yaw_rate_radps)
-    m.linear_acceleration.x = float(state.longitudinal_accel_mps2)
-    m.linear_acceleration.y = float(state.lateral_accel_mps2)
-    m.linear_acceleration.z = GRAVITY_MPS2
+    _set_fields(m, IMU_FIELDS, imu_values(_StateFields(state)))
     return m
 
 

@@ -39,7 +39,8 @@ from typing import Any
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 
-from fourws_ros import cdr, conversions, reporting, topics
+from fourws_ros import conversions, reporting, topics
+from fourws_run import codecs
 from fourws_run.ticks import StateGate
 from fourws_sim.errors import FourwsError, ParameterError
 
@@ -98,10 +99,10 @@ class ManeuverNode(Node):
         self._config_pub = reporting.publish_node_config(
             self, self.counts, topics.Role.MANEUVER,
             {"maneuver": self.maneuver.to_dict(), "vehicle": vehicle.name})
-        # raw: the fast decoder keeps the lockstep answer chain short (fourws_ros.cdr)
+        # raw: the fast decoder keeps the lockstep answer chain short (fourws_run.codecs)
         self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
                                  self._on_state, topics.STREAM_QOS, raw=True)
-        self._driver_encoder = cdr.DriverInputEncoder(topics.FRAME_BODY)
+        self._driver_encoder = codecs.DriverInputEncoder(topics.FRAME_BODY)
         self._recorder = reporting.RecorderWatch(self)
         self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
                                  self._on_sim_status, topics.STATUS_QOS)
@@ -136,8 +137,8 @@ class ManeuverNode(Node):
         if self.done:
             return
         try:
-            outputs = cdr.parse_state(raw)
-        except cdr.CdrError as exc:
+            outputs = codecs.parse_state(raw)
+        except codecs.CodecError as exc:
             self.gate.rejections.add(topics.STATE, "not a VehicleState", str(exc))
             return
         t = outputs["sim_time_s"]

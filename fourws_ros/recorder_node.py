@@ -44,7 +44,6 @@ recorder loses at most that window plus one flush period of data.
 
 from __future__ import annotations
 
-import struct
 import sys
 import time
 from pathlib import Path
@@ -57,6 +56,7 @@ from fourws_ros import topics
 from fourws_ros.identity import PublisherNames, drain, publisher_gid
 from fourws_run.accounting import Ledger
 from fourws_run.bagfile import BagError, BagWriter
+from fourws_run.cdr import stamp_ns
 from fourws_sim.errors import ParameterError
 
 #: The recorder reports its progress at least every this many messages taken (and after a
@@ -70,32 +70,8 @@ UNIDENTIFIED_AFTER_S = 5.0
 MAX_PENDING = 20000
 
 _NS_PER_S = 1_000_000_000
-#: CDR encapsulation header (2 bytes kind + 2 bytes options) before the payload.
-_CDR_HEADER_BYTES = 4
-#: Encapsulation kinds of plain CDR (big/little endian); byte 1 is 1 for little endian.
-_CDR_LITTLE_ENDIAN = 1
-_STAMP_LE = struct.Struct("<iI")
-_STAMP_BE = struct.Struct(">iI")
 #: Topics whose status messages carry a publisher's counts.
 _REPORT_TOPICS = (topics.SIM_STATUS, topics.MANEUVER_STATUS)
-
-
-def stamp_ns(data: bytes | memoryview) -> int | None:
-    """``header.stamp`` (or ``Clock.clock``) of a serialized message in ns, or ``None``.
-
-    Every stamped graph message starts with a ``builtin_interfaces/Time`` (``int32 sec``,
-    ``uint32 nanosec``), so the stamp sits right after the 4-byte CDR encapsulation header.
-
-    Parameters
-    ----------
-    data : bytes
-        CDR-serialized message (with encapsulation header).
-    """
-    if len(data) < _CDR_HEADER_BYTES + _STAMP_LE.size:
-        return None
-    fmt = _STAMP_LE if data[1] == _CDR_LITTLE_ENDIAN else _STAMP_BE
-    sec, nanosec = fmt.unpack_from(data, _CDR_HEADER_BYTES)
-    return sec * _NS_PER_S + nanosec
 
 
 class RecorderNode(Node):
@@ -233,7 +209,8 @@ class RecorderNode(Node):
             return  # subscribed for the accounting only
         if not self.ledger.on_message(topic, node, seq):
             return
-        t_ns = stamp_ns(data) if topic not in topics.LATCHED_TOPICS else None
+        t_ns = (stamp_ns(data, topics.TOPIC_TYPES[topic]) if topic not in topics.LATCHED_TOPICS
+                else None)
         if t_ns is None:
             t_ns = self._last_stamp_ns
         elif t_ns > self._last_stamp_ns:

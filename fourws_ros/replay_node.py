@@ -45,7 +45,7 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, Paramete
 from rclpy.node import Node
 
 from fourws_ros import conversions, reporting, topics
-from fourws_ros.recorder_node import stamp_ns
+from fourws_run.cdr import stamp_ns
 from fourws_run.ticks import Rejections
 from fourws_sim.errors import ParameterError
 
@@ -124,7 +124,7 @@ class ReplayNode(Node):
         if self.mode == "answer":
             self._by_stamp: dict[int, list[tuple[str, bytes]]] = {}
             for _, topic, raw in self.messages:
-                key = stamp_ns(raw)
+                key = stamp_ns(raw, topics.TOPIC_TYPES[topic])
                 if key is not None:
                     self._by_stamp.setdefault(key, []).append((topic, raw))
             self._left = sum(len(v) for v in self._by_stamp.values())
@@ -143,7 +143,7 @@ class ReplayNode(Node):
                                f"{', '.join(played)} from {path} ({self.mode})")
 
     def _on_state(self, raw: bytes) -> None:
-        key = stamp_ns(raw)
+        key = stamp_ns(raw, topics.TOPIC_TYPES[topics.STATE])
         if key is None or self._done_sent:
             return
         due = self._by_stamp.pop(key, [])

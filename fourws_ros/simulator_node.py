@@ -63,7 +63,8 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
                                 SetParametersResult)
 from rclpy.node import Node
 
-from fourws_ros import cdr, conversions, reporting, topics
+from fourws_ros import conversions, reporting, topics
+from fourws_run import codecs
 from fourws_run.ticks import (FlowWindow, InputLimits, LockstepAnswers, Pacer, RealtimeAnswers,
                               Tick, TickEngine, whole_multiple)
 from fourws_sim.drivers import DriverCommand
@@ -220,7 +221,7 @@ class SimulatorNode(Node):
         self.odom_pub = self.counts.publisher(self, topics.ODOM)
         self.imu_pub = self.counts.publisher(self, topics.IMU)
         self.status_pub = self.counts.publisher(self, topics.SIM_STATUS)
-        # raw + fourws_ros.cdr: short lockstep answer chain
+        # raw + fourws_run.codecs: short lockstep answer chain
         self.driver_sub = self.create_subscription(msg(topics.DRIVER_INPUT),
                                                    topics.DRIVER_INPUT, self._on_driver,
                                                    topics.STREAM_QOS, raw=True)
@@ -234,11 +235,11 @@ class SimulatorNode(Node):
         self.window = FlowWindow(int(self._param("recorder_window")), _FLOW_TOPICS)
         self._recorder = reporting.RecorderWatch(self, subscribe=False)
         # state, odometry, IMU and clock go out as CDR bytes written straight from the outputs
-        # (fourws_ros.cdr), not through Python messages: a shorter lockstep tick, and less
+        # (fourws_run.codecs), not through Python messages: a shorter lockstep tick, and less
         # time holding the GIL in the realtime thread
-        self._state_encoder = cdr.StateEncoder(self.model_name, topics.FRAME_BODY)
-        self._odom_encoder = cdr.OdometryEncoder(topics.FRAME_ODOM, topics.FRAME_BODY)
-        self._imu_encoder = cdr.ImuEncoder(topics.FRAME_BODY)
+        self._state_encoder = codecs.StateEncoder(self.model_name, topics.FRAME_BODY)
+        self._odom_encoder = codecs.OdometryEncoder(topics.FRAME_ODOM, topics.FRAME_BODY)
+        self._imu_encoder = codecs.ImuEncoder(topics.FRAME_BODY)
         self.create_service(Trigger, topics.SRV_RESET, self._on_reset)
         self.create_service(SetBool, topics.SRV_PAUSE, self._on_pause)
         config = {
@@ -302,8 +303,8 @@ class SimulatorNode(Node):
     # ------------------------------------------------------------------ inputs
     def _on_driver(self, raw: bytes) -> None:
         try:
-            stamp, cmd = cdr.parse_driver_input(raw)
-        except cdr.CdrError as exc:
+            stamp, cmd = codecs.parse_driver_input(raw)
+        except codecs.CodecError as exc:
             self.rejections.add(topics.DRIVER_INPUT, "not a DriverInput", str(exc))
             return
         if self.clock_mode == "realtime":
@@ -315,8 +316,8 @@ class SimulatorNode(Node):
 
     def _on_cmd(self, raw: bytes) -> None:
         try:
-            msg = cdr.parse_rear_steer_command(raw)
-        except cdr.CdrError as exc:
+            msg = codecs.parse_rear_steer_command(raw)
+        except codecs.CodecError as exc:
             self.rejections.add(topics.REAR_STEER_CMD, "not a RearSteerCommand", str(exc))
             return
         if self.clock_mode == "realtime":
@@ -511,7 +512,7 @@ class SimulatorNode(Node):
         self._reported_wait = False
         self._sent_at = time.perf_counter()
         self.state_pub.publish(raw)  # first: the answers' critical path starts here
-        self.clock_pub.publish(cdr.encode_clock(tick.t))
+        self.clock_pub.publish(codecs.encode_clock(tick.t))
         self._publish_side(tick)
 
     def _lockstep_advance(self) -> None:
@@ -644,7 +645,7 @@ class SimulatorNode(Node):
                         return
                     book.published(tick)
                     self.state_pub.publish(raw)
-                    self.clock_pub.publish(cdr.encode_clock(tick.t))
+                    self.clock_pub.publish(codecs.encode_clock(tick.t))
                     self._publish_side(tick)
 
     def _stop_rt_thread(self) -> None:

@@ -46,11 +46,9 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from fourws_run import interface
 from fourws_run.accounting import RunAccount, account_from_messages
 from fourws_sim.errors import FourwsError
-from fourws_sim.params import find_resource_dir
 
-#: Folder with the fourws ``.msg`` definitions (``share/fourws/msg`` once installed).
-MSG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "msg", interface.MSG_PACKAGE,
-                            "msg", "*.msg")
+#: Folder with the fourws ``.msg`` definitions.
+MSG_DIR = interface.MSG_DIR
 #: rosbag2 metadata format version written.
 BAG_VERSION = 9
 #: ``custom_data`` keys of ``metadata.yaml`` written by the recorder.

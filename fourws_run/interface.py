@@ -17,8 +17,13 @@ run (the recorder does not store it, it is counted as foreign).
 from __future__ import annotations
 
 import enum
+from pathlib import Path
 
-from fourws_sim.params import N_WHEELS
+from rosbags.interfaces import Nodetype
+from rosbags.typesys import get_types_from_msg
+
+from fourws_sim.errors import FourwsError
+from fourws_sim.params import N_WHEELS, find_resource_dir
 
 NAMESPACE = "/fourws"
 
@@ -50,6 +55,9 @@ MSG_PACKAGE = "fourws"
 #: Earlier name of the message package (a separate ``fourws_msgs`` interface package); bags
 #: recorded with it still decode (the bag tools register the definitions under both names).
 LEGACY_MSG_PACKAGES: tuple[str, ...] = ("fourws_msgs",)
+#: Folder with the fourws ``.msg`` definitions (``share/fourws/msg`` once installed).
+MSG_DIR = find_resource_dir(Path(__file__).resolve().parent.parent / "msg", MSG_PACKAGE, "msg",
+                            "*.msg")
 
 #: Message type of each topic, in rosbag2 spelling ``package/msg/Name``.
 TOPIC_TYPES: dict[str, str] = {
@@ -80,14 +88,56 @@ FRAME_BODY = "base_link"
 WHEELS = ("FL", "FR", "RL", "RR")
 assert len(WHEELS) == N_WHEELS
 
-#: Scalar float fields of ``VehicleState`` taken from ``Simulator.outputs()``, message order.
-STATE_SCALARS = ("x_m", "y_m", "heading_rad", "speed_mps", "lateral_velocity_mps",
-                 "yaw_rate_radps", "roll_rad", "roll_rate_radps", "sideslip_rad",
-                 "longitudinal_accel_mps2", "lateral_accel_mps2", "front_wheel_angle_rad",
-                 "rear_wheel_angle_rad")
-#: Per-wheel (``float64[4]``) fields of ``VehicleState``, message order.
-STATE_WHEELS = ("wheel_speed_radps", "normal_load_n", "slip_angle_rad", "slip_ratio", "fx_n",
-                "fy_n", "mz_nm")
+#: Fields of ``VehicleState`` that describe the message rather than the vehicle (the
+#: simulator fills them from its clock and model name); every other field is a model output.
+STATE_ENVELOPE = ("header", "step", "sim_time_s", "model")
+
+
+class MessageDefinitionError(FourwsError):
+    """A ``.msg`` definition fourws cannot map onto its data."""
+
+
+def state_output_fields(path: Path | None = None) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The model outputs a ``VehicleState`` definition carries: (float64 fields,
+    float64[N_WHEELS] fields), each in message order.
+
+    Parameters
+    ----------
+    path : Path, optional
+        The definition; default ``msg/VehicleState.msg``.
+
+    Raises
+    ------
+    MessageDefinitionError
+        A field outside :data:`STATE_ENVELOPE` of another type (the simulator's outputs are
+        floats and per-wheel float arrays).
+    """
+    path = MSG_DIR / "VehicleState.msg" if path is None else path
+    msgtype = TOPIC_TYPES[STATE]
+    _, fields = get_types_from_msg(path.read_text(), msgtype)[msgtype]
+    scalars: list[str] = []
+    wheels: list[str] = []
+    for name, (kind, detail) in fields:
+        if name in STATE_ENVELOPE:
+            continue
+        if kind == Nodetype.BASE and detail[0] == "float64":
+            scalars.append(name)
+        elif (kind == Nodetype.ARRAY and detail[0] == (Nodetype.BASE, ("float64", 0))
+              and detail[1] == N_WHEELS):
+            wheels.append(name)
+        else:
+            raise MessageDefinitionError(
+                f"{path}: field {name!r} is neither float64 nor float64[{N_WHEELS}] (the "
+                "simulator's outputs are floats and per-wheel float arrays)")
+    return tuple(scalars), tuple(wheels)
+
+
+_STATE_FIELDS = state_output_fields()
+#: Scalar float fields of ``VehicleState`` taken from ``Simulator.outputs()``, message order
+#: (read from ``msg/VehicleState.msg``).
+STATE_SCALARS = _STATE_FIELDS[0]
+#: Per-wheel (``float64[4]``) fields of ``VehicleState``, message order (same source).
+STATE_WHEELS = _STATE_FIELDS[1]
 
 
 class Role(str, enum.Enum):
@@ -141,10 +191,10 @@ def time_to_ns(time_s: float) -> int:
 
 __all__ = [
     "CLOCK", "DRIVER_INPUT", "FRAME_BODY", "FRAME_ODOM", "IMU", "LATCHED_TOPICS",
-    "LEGACY_MSG_PACKAGES", "MANEUVER_COUNTED", "MANEUVER_STATUS", "MSG_PACKAGE", "NAMESPACE",
-    "NODE_CONFIG",
-    "NODE_NAMES", "NS_PER_S", "N_WHEELS", "ODOM", "REAR_STEER_CMD", "RECORDED_TOPICS",
-    "RECORDER_STATUS", "RUN_CONFIG", "Role", "SIMULATOR_COUNTED", "SIM_STATUS", "SRV_PAUSE",
-    "SRV_RESET", "STATE", "STATE_SCALARS", "STATE_WHEELS", "TOPIC_TYPES", "WHEELS",
-    "WRITER_ROLES", "time_to_ns",
+    "LEGACY_MSG_PACKAGES", "MANEUVER_COUNTED", "MANEUVER_STATUS", "MSG_DIR", "MSG_PACKAGE",
+    "MessageDefinitionError", "NAMESPACE", "NODE_CONFIG", "NODE_NAMES", "NS_PER_S", "N_WHEELS",
+    "ODOM", "REAR_STEER_CMD", "RECORDED_TOPICS", "RECORDER_STATUS", "RUN_CONFIG", "Role",
+    "SIMULATOR_COUNTED", "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATE_ENVELOPE",
+    "STATE_SCALARS", "STATE_WHEELS", "TOPIC_TYPES", "WHEELS", "WRITER_ROLES",
+    "state_output_fields", "time_to_ns",
 ]

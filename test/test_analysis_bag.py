@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from fourws_analysis import bag as B
+from fourws_run.cdr import decode_many
 
 
 def _write_state_bag(path: Path, n: int, dt_s: float, jitter_s: float = 0.0,
@@ -49,7 +50,7 @@ def test_fast_decoder_equals_rosbags_deserializer(tmp_path: Path) -> None:
     from rosbags.rosbag2 import Reader
     with Reader(tmp_path / "b") as reader:
         raws = [raw for c, _, raw in reader.messages() if c.topic == B.TOPIC_STATE]
-    fast = B._decode_fixed(mt, raws)
+    fast = decode_many(mt, raws)
     slow = B._decode_generic(mt, raws)
     assert fast is not None
     assert set(fast) == set(slow)

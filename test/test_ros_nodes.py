@@ -204,13 +204,23 @@ def test_recorder_sigkill_leaves_repairable_bag(tmp_path, rclpy_context):
 def test_stamp_parsing_matches_messages():
     from rclpy.serialization import serialize_message
 
-    from fourws_ros.recorder_node import stamp_ns
+    from fourws_run.cdr import stamp_ns
 
     msg = topics.message_class(topics.STATE)()
     conversions.set_stamp(msg.header.stamp, 12.345678901)
-    assert stamp_ns(serialize_message(msg)) == 12_345_678_901
+    msg.model = "8dof"
+    assert stamp_ns(serialize_message(msg), topics.TOPIC_TYPES[topics.STATE]) == 12_345_678_901
     clock = conversions.clock_msg(3.5)
-    assert stamp_ns(serialize_message(clock)) == 3_500_000_000
+    assert stamp_ns(serialize_message(clock), topics.TOPIC_TYPES[topics.CLOCK]) == 3_500_000_000
+    # status messages hold sequences after the header: the stamp still sits at a fixed place
+    status = topics.message_class(topics.SIM_STATUS)()
+    conversions.set_stamp(status.header.stamp, 2.25)
+    status.published_topics = ["a", "bb"]
+    assert stamp_ns(serialize_message(status),
+                    topics.TOPIC_TYPES[topics.SIM_STATUS]) == 2_250_000_000
+    # a message without a stamp has none (not its first bytes read as one)
+    text = topics.message_class(topics.NODE_CONFIG)(data="{}")
+    assert stamp_ns(serialize_message(text), topics.TOPIC_TYPES[topics.NODE_CONFIG]) is None
 
 
 # ----------------------------------------------------------------------------- controller
@@ -388,97 +398,6 @@ def test_simulator_refuses_bad_configuration(rclpy_context):
         _make_node(SimulatorNode, rclpy_context, integration_step_s=5.0)
 
 
-# ----------------------------------------------------------------------------- fast CDR
-def test_fast_cdr_decoders_equal_rclpy():
-    from rclpy.serialization import serialize_message
-
-    from fourws_ros import cdr
-    from fourws_sim.drivers import DriverCommand
-
-    rng = np.random.default_rng(7)
-    outputs = {k: float(rng.normal()) for k in conversions.STATE_SCALARS}
-    outputs.update({k: rng.normal(size=4) for k in conversions.STATE_WHEELS})
-    for model in ("8dof", "2dof-lagged"):  # string lengths shift every later offset
-        msg = conversions.state_msg(outputs, time_s=12.3456789, step=12345, model=model)
-        msg.header.frame_id = "base_link_x"
-        parsed = cdr.parse_state(serialize_message(msg))
-        assert parsed["step"] == 12345 and parsed["sim_time_s"] == 12.3456789
-        assert parsed["stamp_ns"] == conversions.stamp_to_ns(msg.header.stamp)
-        assert parsed["model"] == model
-        for key in conversions.STATE_SCALARS:
-            assert parsed[key] == outputs[key]  # bit-identical
-        for key in conversions.STATE_WHEELS:
-            np.testing.assert_array_equal(parsed[key], outputs[key])
-    cmd = DriverCommand(0.3, 0.02, 1.5, (1.0, 2.0, 3.0, 4.0), (0.0, 0.5, 0.25, 0.125))
-    stamp, back = cdr.parse_driver_input(serialize_message(conversions.driver_msg(cmd, 7.25)))
-    assert back == cmd and stamp == 7_250_000_000
-    state = conversions.state_msg(outputs, time_s=3.0, step=3000, model="8dof")
-    for law in ("sol1", "rwc2_3dof"):
-        raw = serialize_message(conversions.rear_cmd_msg(
-            -0.0123, 0.5, law, conversions.stamp_to_ns(state.header.stamp), state.step))
-        back = cdr.parse_rear_steer_command(raw)
-        assert back == {"angle_rad": -0.0123, "rate_radps": 0.5, "law": law,
-                        "state_stamp_ns": 3_000_000_000, "state_step": 3000}
-    with pytest.raises(cdr.CdrError):
-        cdr.parse_state(b"\x00\x01\x00\x00\x01")
-
-
-def test_fast_cdr_encoders_equal_rclpy():
-    """The encoders' bytes deserialize (with rclpy) to exactly the message the conversions
-    build, and are as long as rclpy's own serialization (padding bytes aside, which rclpy
-    leaves uninitialized)."""
-    from rclpy.serialization import deserialize_message, serialize_message
-
-    from fourws_ros import cdr
-    from fourws_sim.drivers import DriverCommand
-    from fourws_sim.errors import NonFiniteError
-
-    def same(raw: bytes, msg) -> bool:
-        return (len(raw) == len(serialize_message(msg))
-                and deserialize_message(raw, type(msg)) == msg)
-
-    rng = np.random.default_rng(11)
-    odom = cdr.OdometryEncoder(topics.FRAME_ODOM, topics.FRAME_BODY)
-    imu = cdr.ImuEncoder(topics.FRAME_BODY)
-    for model in ("8dof", "2dof", "3dof-lagged"):  # string lengths shift every later offset
-        encoder = cdr.StateEncoder(model, topics.FRAME_BODY)
-        for _ in range(20):
-            outputs = {k: float(rng.normal() * 100.0) for k in conversions.STATE_SCALARS}
-            if model == "8dof":  # single-track models have no wheel fields: they stay zero
-                outputs.update({k: rng.normal(size=4) * 1e3 for k in conversions.STATE_WHEELS})
-            t, step = float(rng.uniform(0.0, 1e3)), int(rng.integers(0, 2**50))
-            msg = conversions.state_msg(outputs, time_s=t, step=step, model=model)
-            assert same(encoder.encode(outputs, t, step), msg)
-            stamp = conversions.stamp_to_ns(msg.header.stamp)
-            assert same(odom.encode(outputs, stamp), conversions.odometry_msg(msg))
-            assert same(imu.encode(outputs, stamp), conversions.imu_msg(msg))
-            assert same(cdr.encode_clock(t), conversions.clock_msg(t))
-    driver = cdr.DriverInputEncoder(topics.FRAME_BODY)
-    rear = cdr.RearSteerCommandEncoder(topics.FRAME_BODY)
-    for _ in range(50):
-        v = [float(x) for x in rng.normal(size=11)]
-        cmd = DriverCommand(v[0], v[1], v[2], tuple(v[3:7]), tuple(v[7:11]))
-        t = float(rng.uniform(0.0, 1e3))
-        assert same(driver.encode(cmd, t), conversions.driver_msg(cmd, t))
-        for law in ("sol1", "fws", "rwc2_3dof", "x"):  # each alignment of the later fields
-            stamp, step = int(rng.integers(0, 2**40)), int(rng.integers(0, 2**50))
-            assert same(rear.encode(v[0], v[1], law, stamp, step),
-                        conversions.rear_cmd_msg(v[0], v[1], law, stamp, step))
-    # a changed value is seen by the comparison (the check above can fail)
-    changed = conversions.state_msg(outputs, time_s=t, step=step, model="8dof")
-    changed.fy_n[3] += 1.0
-    assert not same(cdr.StateEncoder("8dof", topics.FRAME_BODY).encode(outputs, t, step),
-                    changed)
-    # nothing non-finite leaves a node, as with the message conversions
-    with pytest.raises(NonFiniteError, match="yaw_rate_radps"):
-        cdr.StateEncoder("8dof", topics.FRAME_BODY).encode(
-            {**outputs, "yaw_rate_radps": math.nan}, 1.0, 1)
-    with pytest.raises(NonFiniteError, match="front_wheel_angle_rad"):
-        driver.encode(DriverCommand(0.0, math.inf), 1.0)
-    with pytest.raises(NonFiniteError):
-        rear.encode(math.nan, 0.0, "sol1", 0, 0)
-
-
 # ----------------------------------------------------------------------------- replay
 def test_replay_timed_plays_every_message_at_rate(tmp_path, rclpy_context):
     from rclpy.executors import SingleThreadedExecutor
@@ -632,7 +551,7 @@ def test_realtime_command_timeout_falls_back_to_zero_and_recovers(rclpy_context)
 def test_message_conversions_round_trip():
     from rclpy.serialization import deserialize_message, serialize_message
 
-    from fourws_ros import cdr
+    from fourws_run import codecs
     from fourws_sim.drivers import DriverCommand
 
     rng = np.random.default_rng(3)
@@ -641,7 +560,7 @@ def test_message_conversions_round_trip():
     msg = conversions.state_msg(outputs, time_s=0.123456789, step=123, model="3dof")
     back = conversions.state_to_outputs(deserialize_message(
         serialize_message(msg), topics.message_class(topics.STATE)))
-    fast = cdr.parse_state(serialize_message(msg))
+    fast = codecs.parse_state(serialize_message(msg))
     for key in conversions.STATE_SCALARS:
         assert back[key] == outputs[key] == fast[key]
     assert back["sim_time_s"] == 0.123456789
