@@ -22,8 +22,8 @@ import numpy as np
 
 from fourws_run.codecs import (IMU_FIELDS, ODOMETRY_FIELDS, check_finite_mapping, imu_values,
                                odometry_values, outputs_finite)
-from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, N_WHEELS, NS_PER_S, STATE_SCALARS,
-                                  STATE_WHEELS, time_to_ns)
+from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, NS_PER_S, STATE_SCALARS, STATE_WHEELS,
+                                  time_to_ns)
 from fourws_sim.errors import NonFiniteError
 
 

@@ -146,7 +146,7 @@ def test_decoder_refuses_what_is_not_the_message() -> None:
     msg = topics.message_class(topics.STATE)(model="8dof")
     raw = serialize_message(msg)
     assert dec.decode(raw)["model"] == "8dof"
-    for bad, reason in ((raw[:-1], "not a fourws_msgs/msg/VehicleState"),
+    for bad, reason in ((raw[:-1], "not a fourws/msg/VehicleState"),
                         (raw[:3], "VehicleState"),
                         (b"\x00\x03" + raw[2:], "not plain CDR"),
                         (raw[:12] + b"\x00\x00\x00\xf0" + raw[16:], "runs past the end"),
@@ -159,7 +159,7 @@ def test_decoder_refuses_what_is_not_the_message() -> None:
     with pytest.raises(cdr.CodecError, match="overrun_times_s.*sequence"):
         cdr.Decoder(topics.TOPIC_TYPES[topics.SIM_STATUS])
     with pytest.raises(cdr.CodecError, match="unknown message type"):
-        cdr.layout("fourws_msgs/msg/Nothing")
+        cdr.layout("fourws/msg/Nothing")
     with pytest.raises(cdr.CodecError, match="header.frame_id"):
         cdr.layout(msgtype, {"model": "8dof"})  # a string without text
     with pytest.raises(cdr.CodecError, match="no string fields.*frame"):
@@ -302,7 +302,7 @@ def test_parsers_equal_rclpy():
     with pytest.raises(codecs.CodecError):
         codecs.parse_state(b"\x00\x01\x00\x00\x01")
     # CDR does not name its type: another message is refused by its size
-    with pytest.raises(codecs.CodecError, match="not a fourws_msgs/msg/DriverInput"):
+    with pytest.raises(codecs.CodecError, match="not a fourws/msg/DriverInput"):
         codecs.parse_driver_input(serialize_message(state))
 
 
