@@ -136,6 +136,7 @@ class ControllerNode(Node):
         self.pub = self.counts.publisher(self, topics.REAR_STEER_CMD)
         self._config_pub = self.counts.publisher(self, topics.NODE_CONFIG)
         self._publish_config()
+        self.matched = reporting.match_wait(self, self.counts)
         self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
                                  self._on_sim_status, topics.STATUS_QOS)
         self._recorder = reporting.RecorderWatch(self)
@@ -152,6 +153,7 @@ class ControllerNode(Node):
         self._driver: dict[int, float] = {}  # stamp ns -> front road-wheel angle, rad
         self._last_front = 0.0
         self.fallbacks = 0
+        self._answered_once = False
         self._timer = self.create_timer(0.05, self._check_wait)
         self.get_logger().info(f"law {self.law_name} on {self.vehicle.name}")
 
@@ -288,6 +290,8 @@ class ControllerNode(Node):
         self._try_answer(fallback=False)
 
     def _check_wait(self) -> None:
+        if self._state is not None and not self._answered_once:
+            self._try_answer(fallback=False)  # held until the publishers matched
         wait = float(self.get_parameter("driver_wait_s").value)
         if wait > 0.0 and self._state is not None and time.monotonic() - self._state_rx > wait:
             self._try_answer(fallback=True)
@@ -296,6 +300,12 @@ class ControllerNode(Node):
         state = self._state
         if state is None:
             return
+        if not self._answered_once:
+            # the first answer waits (state and driver input kept) until the command
+            # publisher has matched the run's subscribers (the recorder among them)
+            if not self.matched.ready():
+                return
+            self._answered_once = True
         key = state["stamp_ns"]
         front = self._driver.pop(key, None)
         if front is None:

@@ -104,6 +104,11 @@ class ManeuverNode(Node):
                                  self._on_state, topics.STREAM_QOS, raw=True)
         self._driver_encoder = codecs.DriverInputEncoder(topics.FRAME_BODY)
         self._recorder = reporting.RecorderWatch(self)
+        self.matched = reporting.match_wait(self, self.counts)
+        # a state that came before the publishers matched the run's subscribers (the
+        # recorder among them): answered once they have
+        self._held: bytes | None = None
+        self._held_timer = self.create_timer(0.02, self._answer_held)
         self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
                                  self._on_sim_status, topics.STATUS_QOS)
         self._phase = ""
@@ -133,8 +138,19 @@ class ManeuverNode(Node):
         if bool(self.get_parameter("exit_when_done").value):
             self.finished = True
 
+    def _answer_held(self) -> None:
+        if not self.matched.ready():
+            return
+        self._held_timer.cancel()
+        if self._held is not None:
+            raw, self._held = self._held, None
+            self._on_state(raw)
+
     def _on_state(self, raw: bytes) -> None:
         if self.done:
+            return
+        if not self.matched.ready():
+            self._held = raw  # the latest: in lockstep the first (the simulator waits)
             return
         try:
             outputs = codecs.parse_state(raw)

@@ -49,6 +49,10 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
     # file holds (a study's scaled mass, a belief with scaled cornering stiffness)
     vehicle = {"vehicle": config.vehicle.name,
                "vehicle_json": dumps_config(config.vehicle.to_dict())}
+    # every node publishes only once its publishers have matched the run's subscribers
+    # (fourws_ros.reporting.MatchWait): the expected count of each topic
+    subscribers = dumps_config(expected_subscribers(config, records))
+    gate["expected_subscribers_json"] = subscribers
     params: dict[str, dict[str, Any]] = {
         NODE_NAMES[Role.SIMULATOR]: {
             **vehicle, "model": config.model, "integrator": config.integrator,
@@ -60,6 +64,7 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             "autostart": False,
             "expected_state_subscribers": (2 + int(records)) if lockstep else 0,
             "recorder_window": RECORDER_WINDOW if lockstep and records else 0,
+            "expected_subscribers_json": subscribers,
         },
         NODE_NAMES[Role.MANEUVER]: {
             "maneuver_json": dumps_config(config.maneuver.to_dict()),
@@ -100,6 +105,16 @@ def write_params_file(path: Path, node_params: dict[str, dict[str, Any]]) -> Pat
     return path
 
 
+def expected_subscribers(config: RunConfig, recorded: bool) -> dict[str, int]:
+    """How many of the run's nodes subscribe to each topic (from :func:`expected_endpoints`):
+    a publisher of the topic waits for that many matches before it publishes."""
+    counts: dict[str, int] = {}
+    for topic, kind, _ in expected_endpoints(config, recorded):
+        if kind == "sub":
+            counts[topic] = counts.get(topic, 0) + 1
+    return counts
+
+
 def expected_endpoints(config: RunConfig, recorded: bool) -> list[tuple[str, str, str]]:
     """``(topic, "pub"|"sub", node name)`` that must be in the graph before the run starts."""
     sim, man = NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER]
@@ -118,5 +133,6 @@ def expected_endpoints(config: RunConfig, recorded: bool) -> list[tuple[str, str
     return expected
 
 
-__all__ = ["RECORDER_WINDOW", "dumps_config", "expected_endpoints", "node_parameters",
+__all__ = ["RECORDER_WINDOW", "dumps_config", "expected_endpoints", "expected_subscribers",
+           "node_parameters",
            "write_params_file"]

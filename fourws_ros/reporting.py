@@ -15,9 +15,12 @@ from __future__ import annotations
 import json
 from typing import Any, Mapping
 
+from rcl_interfaces.msg import ParameterDescriptor
+
 from fourws_ros import topics
 from fourws_run.interface import WRITER_ROLES
 from fourws_run.ticks import Rejections
+from fourws_sim.errors import ParameterError
 
 #: How long a node that ended its run waits for its subscribers to acknowledge everything, s.
 DELIVERY_TIMEOUT_S = 30.0
@@ -106,6 +109,72 @@ def publish_counted_status(pub: CountingPublisher, msg: Any, counts: PublishCoun
     pub.pub.publish(msg)
 
 
+#: Name of the node parameter holding the subscribers each published topic must have matched
+#: before a node publishes on it (JSON mapping topic -> count; empty: no wait).
+EXPECTED_SUBSCRIBERS_PARAM = "expected_subscribers_json"
+
+
+def parse_expected_subscribers(text: str) -> dict[str, int]:
+    """The mapping of :data:`EXPECTED_SUBSCRIBERS_PARAM` (``""`` is no expectation).
+
+    Raises
+    ------
+    ParameterError
+        The text is not a JSON mapping of topic names to counts from 0 to 64.
+    """
+    if not text:
+        return {}
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ParameterError(EXPECTED_SUBSCRIBERS_PARAM, f"not JSON ({exc})") from None
+    if not isinstance(value, dict) or not all(
+            isinstance(k, str) and type(n) is int and 0 <= n <= 64 for k, n in value.items()):
+        raise ParameterError(EXPECTED_SUBSCRIBERS_PARAM,
+                             "must map topic names to subscriber counts from 0 to 64")
+    return value
+
+
+class MatchWait:
+    """Holds a node's first publications until each of its counted publishers has matched
+    the subscribers the run expects on its topic.
+
+    Graph discovery tells the launcher that a node subscribes to a topic before that
+    subscription has matched each publisher, and a volatile publisher never resends what it
+    published before a subscriber matched it: a recorder matched late would miss the run's
+    first messages and a lockstep run would stall on them. Matching is checked by the
+    publishers themselves (rclpy's matched-subscription count), once; after that it stays
+    ready (a node that leaves later ends the run by other means).
+    """
+
+    def __init__(self, counts: PublishCounts, expected: Mapping[str, int]) -> None:
+        self._counts = counts
+        self._expected = dict(expected)
+        self._ready = not self._expected
+
+    def ready(self) -> bool:
+        """True once every counted publisher has its expected subscribers."""
+        if not self._ready:
+            self._ready = not self.unmatched()
+        return self._ready
+
+    def unmatched(self) -> list[str]:
+        """Topics whose publisher has fewer matched subscribers than expected."""
+        return [p.topic for p in self._counts.publishers
+                if p.get_subscription_count() < self._expected.get(p.topic, 0)]
+
+
+def match_wait(node: Any, counts: PublishCounts) -> MatchWait:
+    """Declare :data:`EXPECTED_SUBSCRIBERS_PARAM` on ``node`` and give the :class:`MatchWait`
+    of its counted publishers (raises ``ParameterError`` for a malformed mapping)."""
+    node.declare_parameter(EXPECTED_SUBSCRIBERS_PARAM, "", ParameterDescriptor(
+        description="JSON mapping topic -> the number of the run's subscribers this node's "
+                    "publisher of the topic must have matched before it publishes (empty: "
+                    "no wait; fourws run sets it)", read_only=True))
+    text = str(node.get_parameter(EXPECTED_SUBSCRIBERS_PARAM).value)
+    return MatchWait(counts, parse_expected_subscribers(text))
+
+
 class RecorderWatch:
     """What the recorder reports stored (``/fourws/recorder_status``), for a node that must
     know its messages are in the bag before it exits."""
@@ -178,6 +247,7 @@ def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
             time.sleep(0.05)
 
 
-__all__ = ["CountingPublisher", "DELIVERY_TIMEOUT_S", "PublishCounts", "RecorderWatch",
-           "SIGNAL_DELIVERY_TIMEOUT_S", "delivery_timeout", "fill_accounting",
-           "publish_counted_status", "publish_node_config", "wait_delivered"]
+__all__ = ["CountingPublisher", "DELIVERY_TIMEOUT_S", "EXPECTED_SUBSCRIBERS_PARAM", "MatchWait",
+           "PublishCounts", "RecorderWatch", "SIGNAL_DELIVERY_TIMEOUT_S", "delivery_timeout",
+           "fill_accounting", "parse_expected_subscribers", "publish_counted_status",
+           "publish_node_config", "wait_delivered"]

@@ -221,6 +221,7 @@ class SimulatorNode(Node):
         self.odom_pub = self.counts.publisher(self, topics.ODOM)
         self.imu_pub = self.counts.publisher(self, topics.IMU)
         self.status_pub = self.counts.publisher(self, topics.SIM_STATUS)
+        self.matched = reporting.match_wait(self, self.counts)
         # raw + fourws_run.codecs: short lockstep answer chain
         self.driver_sub = self.create_subscription(msg(topics.DRIVER_INPUT),
                                                    topics.DRIVER_INPUT, self._on_driver,
@@ -428,7 +429,7 @@ class SimulatorNode(Node):
         return (self.state_pub.get_subscription_count() >= need
                 and (need == 0 or (self.driver_sub.get_publisher_count() >= 1
                                    and self.cmd_sub.get_publisher_count() >= 1))
-                and self._recorder_seen)
+                and self._recorder_seen and self.matched.ready())
 
     def _start(self) -> None:
         if self.ended or self._started and self.clock_mode == "lockstep":

@@ -8,6 +8,7 @@ this machine only); the recorder durability tests run it as its own process, to 
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -576,3 +577,82 @@ def test_message_conversions_round_trip():
     q = conversions.odometry_msg(msg).pose.pose.orientation
     assert (q.x, q.y) == (0.0, 0.0)
     assert q.z == pytest.approx(math.sin(0.25)) and q.w == pytest.approx(math.cos(0.25))
+
+
+# ----------------------------------------------------------------------------- matching
+def test_expected_subscribers_of_the_default_run():
+    """Each topic's subscriber count is that of the run's node set (expected endpoints): the
+    state has the maneuver, the controller and the recorder; the command the simulator and
+    the recorder; the driver input the simulator, the built-in controller and the
+    recorder."""
+    from fourws_ros.node_params import expected_subscribers
+    from fourws_run.config import RunConfig
+    from fourws_run.scenario import load_scenario
+
+    config = RunConfig.from_scenario(load_scenario("default"), "sol1")
+    counts = expected_subscribers(config, recorded=True)
+    assert counts[topics.STATE] == 3
+    assert counts[topics.REAR_STEER_CMD] == 2
+    assert counts[topics.DRIVER_INPUT] == 3
+    assert all(counts[t] >= 1 for t in config.recorded_topics)
+    unrecorded = expected_subscribers(config, recorded=False)
+    assert unrecorded[topics.STATE] == 2 and topics.ODOM not in unrecorded
+
+
+@pytest.mark.parametrize("text", ["{not json", "[1, 2]", '{"/fourws/state": -1}',
+                                  '{"/fourws/state": 2.5}', '{"/fourws/state": 65}',
+                                  '{"/fourws/state": true}'])
+def test_expected_subscribers_parameter_is_validated(text):
+    from fourws_ros.reporting import EXPECTED_SUBSCRIBERS_PARAM, parse_expected_subscribers
+    from fourws_sim.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=EXPECTED_SUBSCRIBERS_PARAM):
+        parse_expected_subscribers(text)
+    assert parse_expected_subscribers("") == {}
+    assert parse_expected_subscribers('{"/fourws/state": 3}') == {topics.STATE: 3}
+
+
+def test_simulator_publishes_nothing_before_its_subscribers_matched(rclpy_context):
+    """A volatile publisher never resends what it published before a subscriber matched it,
+    so a subscriber that is in the graph but not yet matched (the recorder, under load)
+    would miss the run's first states. The simulator expecting two state subscribers sends
+    no state while one is matched; once the second matches, both receive the run from its
+    first state (step 0)."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from fourws_ros.simulator_node import SimulatorNode
+
+    sim = _make_node(SimulatorNode, rclpy_context, command_timeout_s=30.0,
+                     expected_state_subscribers=1,
+                     expected_subscribers_json=json.dumps({topics.STATE: 2}))
+    peer = _Peer(rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(sim)
+    executor.add_node(peer.node)
+    late = rclpy.create_node("late_subscriber", context=rclpy_context)
+    try:
+        # the peer matches (the simulator's own state-subscriber condition holds) ...
+        assert _spin_until(executor, lambda: sim.state_pub.get_subscription_count() >= 1, 20.0)
+        _spin_until(executor, lambda: bool(peer.states), 1.0)
+        # ... but the second expected subscriber is missing: nothing is published
+        assert peer.states == [] and sim.matched.unmatched() == [topics.STATE]
+        got = []
+        late.create_subscription(topics.message_class(topics.STATE), topics.STATE, got.append,
+                                 topics.STREAM_QOS)
+        executor.add_node(late)
+        assert _spin_until(executor, lambda: bool(peer.states) and bool(got), 20.0)
+        assert peer.states[0].step == 0 and got[0].step == 0
+    finally:
+        executor.shutdown()
+        sim.destroy_node()
+        peer.node.destroy_node()
+        late.destroy_node()
+
+
+def test_nodes_refuse_a_malformed_expected_subscribers_parameter(rclpy_context):
+    from fourws_ros.controller_node import ControllerNode
+    from fourws_sim.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="expected_subscribers_json"):
+        _make_node(ControllerNode, rclpy_context, expected_subscribers_json='{"a": "b"}')
