@@ -32,6 +32,8 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 import numpy as np
+from rosbags.interfaces import Nodetype
+from rosbags.serde import SerdeError
 
 from fourws_run import interface
 from fourws_run.accounting import RunAccount, TopicAccount
@@ -75,8 +77,6 @@ def make_message(msgtype: str, **values: Any) -> Any:
 
 
 def _default(store: Any, msgtype: str, values: Mapping[str, Any]) -> Any:
-    from rosbags.interfaces import Nodetype
-
     cls = store.types[msgtype]
     _, fields = store.fielddefs[msgtype]
     kwargs: dict[str, Any] = {}
@@ -221,8 +221,6 @@ class RunData:
 
 
 def _flatten(store: Any, msg: Any, msgtype: str, prefix: str, out: dict[str, Any]) -> None:
-    from rosbags.interfaces import Nodetype
-
     _, fields = store.fielddefs[msgtype]
     for name, (kind, detail) in fields:
         value = getattr(msg, name)
@@ -320,8 +318,6 @@ def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
         recv_by_topic.setdefault(m.topic, []).append(m.log_time_ns)
         types[m.topic] = m.msgtype
     start = min((t[0] for t in recv_by_topic.values()), default=0)
-
-    from rosbags.serde import SerdeError  # lazy, as every rosbags import here
 
     config: dict[str, Any] = {}
     result = RunData(path=str(path), config=config, warnings=warnings,

@@ -19,6 +19,7 @@ import numpy as np
 
 from fourws_analysis.bag import MetricUnavailableError
 from fourws_sim.corridor import clearance
+from fourws_sim.maneuvers import maneuver_spec_from_mapping
 
 #: A section counts as driven through when the record has at least this many samples inside
 #: it (a car at 60 km/h spends 0.66 s in a 11-m section: 66 samples at 100 Hz).
@@ -88,8 +89,6 @@ def lane_change_of_run(x_m: np.ndarray, y_m: np.ndarray,
     MetricUnavailableError
         The maneuver is not a lane change.
     """
-    from fourws_sim.maneuvers import maneuver_spec_from_mapping
-
     if maneuver.get("type") != "double_lane_change":
         raise MetricUnavailableError(f"lane change: needs a double_lane_change run; this run "
                                      f"is {maneuver.get('type') or 'unrecognized'}")

@@ -184,8 +184,6 @@ def eigenvalues_vs_speed(vehicle: Any, speeds_mps: Sequence[float], model: str =
     UnknownNameError
         Unknown model name.
     """
-    from fourws_sim.models import get_model
-
     mod = get_model(model)
     rows = []
     for speed in speeds_mps:

@@ -127,9 +127,9 @@ def lqr_sweep(model_name: str, vehicle: Vehicle,
 def plot_lqr_gains(sweep: LqrSweep, path: str | Path) -> Path:
     """Plot each state's gain versus q, one line per speed (Figures 3.5/3.6/3.13-3.15/3.23-3.26),
     and the root locus over q; write a PNG to ``path`` (matplotlib Agg backend)."""
-    import matplotlib
+    import matplotlib  # matplotlib: about 0.5 s to load, only the plots need it
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: about 0.5 s to load, only the plots need it
 
     n = len(sweep.state_names)
     fig, axes = plt.subplots(1, n + 1, figsize=(4.0 * (n + 1), 3.6), squeeze=False)

@@ -466,9 +466,9 @@ def plot_stability_region(region: StabilityRegion, path: str | Path) -> Path:
     Shows the trajectory-reversal boundary, the Lyapunov/tangency ellipse with its tangency
     points, the curve dV1/dt = 0, and the equilibria (filled = stable). Returns the written path.
     """
-    import matplotlib
+    import matplotlib  # matplotlib: about 0.5 s to load, only the plots need it
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: about 0.5 s to load, only the plots need it
 
     out = Path(path)
     fig, ax = plt.subplots(figsize=(7.0, 5.0))

@@ -41,10 +41,10 @@ _EIG_MARKERS = {"2dof": "s", "3dof": "D", "8dof-lin": "^"}
 
 
 def _plt() -> Any:
-    import matplotlib
+    import matplotlib  # matplotlib: about 0.5 s to load, only the plots need it
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: about 0.5 s to load, only the plots need it
 
     plt.rcParams.update({"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3,
                          "axes.spines.top": False, "axes.spines.right": False,
@@ -58,7 +58,7 @@ def _colors(runs: Sequence[RunAnalysis]) -> dict[str, str]:
 
 
 def _save(fig: Any, path: Path) -> Path:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: about 0.5 s to load, only the plots need it
 
     fig.savefig(path)
     plt.close(fig)
@@ -92,6 +92,7 @@ def figure_time_histories(runs: Sequence[RunAnalysis]) -> Any:
         ax.set_xlabel("time (s)")
     handles, labels = axes.flat[0].get_legend_handles_labels()
     if any("front_wheel_angle_cmd_rad" in r.run.channels for r in runs):
+        # matplotlib: about 0.5 s to load, only the plots need it
         from matplotlib.lines import Line2D
 
         handles += [Line2D([], [], color="k", lw=1.3), Line2D([], [], color="k", ls="--")]
@@ -121,6 +122,7 @@ def _limits(values: list[np.ndarray], pad_fraction: float, min_pad: float
 def _frequency_ticks(ax: Any) -> None:
     """Plain-number frequency ticks at 1, 2, 5 per decade (no crowded minor labels when the
     band spans little more than a decade)."""
+    # matplotlib: about 0.5 s to load, only the plots need it
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
@@ -145,7 +147,7 @@ def figure_bode(runs: Sequence[RunAnalysis]) -> Any | None:
                if any(f"{o.channel}/{road}" in r.frequency for r in runs)]
     if not outputs:
         return None
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # matplotlib: about 0.5 s to load, only the plots need it
 
     plt = _plt()
     colors = _colors(runs)
@@ -329,7 +331,7 @@ def figure_eigenvalues(runs: Sequence[RunAnalysis]) -> Any | None:
     groups = law_groups(runs)
     if not groups:
         return None
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # matplotlib: about 0.5 s to load, only the plots need it
 
     plt = _plt()
     colors = _colors(runs)

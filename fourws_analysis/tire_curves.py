@@ -26,7 +26,7 @@ import numpy as np
 
 from fourws_sim.errors import ParameterError
 from fourws_sim.params import GRAVITY_MPS2, Vehicle
-from fourws_sim.tires import get_tire
+from fourws_sim.tires import get_tire, sti
 
 #: Slip ratios (braking) of Figure C.1.
 FIG_C1_SLIP_RATIOS = (0.0, 0.1, 0.2)
@@ -84,7 +84,6 @@ class TireCurves:
 def default_load_n(vehicle: Vehicle, axle: str, tire_model: str, coeffs: np.ndarray) -> float:
     """Load of the curves: FZT for ``sti``, else the static load of one tire on ``axle``, N."""
     if tire_model == "sti":
-        from fourws_sim.tires import sti
         return float(coeffs[sti.COEF.FZT_LB]) * sti.N_PER_LBF
     c = vehicle.chassis
     lever = c.cg_to_rear_axle_m if axle == "front" else c.cg_to_front_axle_m
@@ -148,9 +147,9 @@ def tire_curves(vehicle: Vehicle, axle: str = "front", fz_n: float | None = None
 
 def plot_tire_curves(curves: TireCurves, path: str | Path) -> Path:
     """Draw Figures C.1 and C.2 side by side into a PNG (matplotlib Agg backend)."""
-    import matplotlib
+    import matplotlib  # matplotlib: about 0.5 s to load, only the plots need it
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: about 0.5 s to load, only the plots need it
 
     path = Path(path)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11.0, 4.2), constrained_layout=True)

@@ -61,9 +61,9 @@ class ProgressBar:
 
 def run(args: argparse.Namespace) -> int:
     """Analyse the bags; exit 0 if all were analysed, 2 if none could be, 1 if some failed."""
-    from fourws_analysis import bag as bagmod
-    from fourws_analysis.compare import analyze_run
-    from fourws_analysis.report import write_report
+    from fourws_analysis import bag as bagmod  # scipy, control: not for --help
+    from fourws_analysis.compare import analyze_run  # scipy, control: not for --help
+    from fourws_analysis.report import write_report  # scipy, control: not for --help
 
     if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0.0):
         raise ParameterError("--dt", f"must be a finite number of seconds > 0, got {args.dt!r}")

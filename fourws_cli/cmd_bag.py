@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Verify or repair each bag; returns the exit code."""
-    from fourws_run.bagfile import repair_bag, verify_bag
+    from fourws_run.bagfile import repair_bag, verify_bag  # rosbags, mcap: not for --help
 
     worst = 0
     for bag in args.bags:

@@ -5,6 +5,9 @@
 from __future__ import annotations
 
 import argparse
+import json
+
+from fourws_cli._bounds import bounded
 
 HELP = "benchmark the 8-DOF simulator (STI tire, RK4 1 ms, one core): real-time factor"
 
@@ -27,14 +30,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark and print its results."""
-    from fourws_cli._bounds import bounded
+    # the simulator and the maneuvers: 0.1 s that `fourws --help` does not need
     from fourws_sim.bench import format_text, run_benchmark, to_json
     from fourws_sim.maneuvers import MAX_DURATION_S
 
     if args.study:
-        import json
-
-        from fourws_study.bench import run_study_benchmark
+        from fourws_study.bench import run_study_benchmark  # numba, pyarrow: not for --help
 
         repeats = int(bounded("--repeats", args.repeats, 1, 1000))
         result = run_study_benchmark(repeats=repeats)

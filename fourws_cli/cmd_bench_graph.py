@@ -27,6 +27,8 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from fourws_cli._bounds import bounded
+
 HELP = "benchmark the ROS 2 node graph (lockstep real-time factor, realtime step lateness)"
 
 
@@ -45,8 +47,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _scenario(duration_s: float, **changes):
-    from fourws_sim.maneuvers import maneuver_spec_from_mapping
-    from fourws_run.scenario import load_scenario
+    from fourws_run.scenario import load_scenario  # rosbags, mcap: not for --help
+    from fourws_sim.maneuvers import maneuver_spec_from_mapping  # 0.04 s: not for --help
 
     sc = load_scenario("default")
     spec = sc.maneuver.to_dict()
@@ -65,7 +67,7 @@ def _recording(record) -> dict[str, object]:
 
 def _overrun_times(bag_path) -> list[float]:
     """Simulation times of every realtime overrun, as the bag holds them."""
-    from fourws_analysis.bag import TOPIC_SIM_STATUS, load_bag
+    from fourws_analysis.bag import TOPIC_SIM_STATUS, load_bag  # scipy, control: not for --help
 
     status = load_bag(bag_path, [TOPIC_SIM_STATUS], allow_incomplete=True).topics.get(
         TOPIC_SIM_STATUS)
@@ -76,12 +78,11 @@ def _overrun_times(bag_path) -> list[float]:
 
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark; returns the exit code."""
-    from fourws_analysis.bag import load_bag
-    from fourws_cli._bounds import bounded
-    from fourws_ros import topics
-    from fourws_ros.graph_run import run_graph
-    from fourws_run.config import RunConfig
-    from fourws_sim.maneuvers import MAX_DURATION_S
+    from fourws_analysis.bag import load_bag  # scipy, control: not for --help
+    from fourws_ros import topics  # rclpy: not for --help
+    from fourws_ros.graph_run import run_graph  # rclpy: not for --help
+    from fourws_run.config import RunConfig  # rosbags, mcap: not for --help
+    from fourws_sim.maneuvers import MAX_DURATION_S  # 0.04 s: not for --help
 
     bounded("--lockstep-seconds", args.lockstep_seconds, 0.0, MAX_DURATION_S, " s",
             low_open=True)

@@ -14,6 +14,8 @@ import argparse
 import time
 from pathlib import Path
 
+from fourws_cli import cmd_analyze
+
 HELP = "run the default scenario for FWS and two 4WS laws through the node graph, then report"
 
 
@@ -27,10 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scenario's laws, analyse the bags, print where everything is."""
-    from fourws_cli import cmd_analyze
-    from fourws_ros.graph_run import run_graph
-    from fourws_run.config import RunConfig
-    from fourws_run.scenario import load_scenario
+    from fourws_ros.graph_run import run_graph  # rclpy: not for --help
+    from fourws_run.config import RunConfig  # rosbags, mcap: not for --help
+    from fourws_run.scenario import load_scenario  # rosbags, mcap: not for --help
 
     scenario = load_scenario(args.scenario)
     out = args.out or Path("runs") / time.strftime("demo-%Y%m%dT%H%M%SZ", time.gmtime())

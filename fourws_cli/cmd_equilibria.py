@@ -20,6 +20,7 @@ import json
 import math
 
 from fourws_cli._bounds import speed_mps
+from fourws_sim.models import check_speed
 from fourws_sim.params import load_vehicle
 
 HELP = "equilibria and stability region of the nonlinear cubic-tire 2-DOF model (ch. 7)"
@@ -46,8 +47,7 @@ def _format_eig(eig: list[list[float]]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Compute and print the equilibria (and the region); returns the exit code."""
-    from fourws_analysis import nonlinear2dof
-    from fourws_sim.models import check_speed
+    from fourws_analysis import nonlinear2dof  # scipy, control: not for --help
 
     speed = speed_mps("--speed-mps", check_speed(args.speed_mps, "--speed-mps"))
     vehicle = load_vehicle(args.vehicle)

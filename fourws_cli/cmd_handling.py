@@ -40,7 +40,7 @@ def _f(x: float | None, fmt: str = ".3f", unit: str = "") -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the handling analysis and print it; returns the exit code."""
-    from fourws_analysis.handling import handling_report
+    from fourws_analysis.handling import handling_report  # scipy, control: not for --help
 
     speeds = [speed_mps("--speeds-mps", v) for v in args.speeds_mps]
     vehicle = load_vehicle(args.vehicle)

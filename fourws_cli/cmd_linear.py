@@ -67,7 +67,7 @@ def _c(z: list[float]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the analysis and print it; returns the exit code."""
-    from fourws_analysis import linear
+    from fourws_analysis import linear  # scipy, control: not for --help
 
     speed = speed_kmh("--speed-kmh", args.speed_kmh) / KMH_PER_MPS
     low, high = (speed_mps("--speed-range-mps", v) for v in args.speed_range_mps)
@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _eightdof_free(vehicle: Any, law: Any, speed_range: list[float]) -> dict[str, Any]:
     """The 8dof-free critical speed of the same car and law, or why it is unavailable."""
-    from fourws_analysis import free_control
+    from fourws_analysis import free_control  # scipy, control: not for --help
 
     try:
         crit = free_control.eightdof_free_critical_speed(vehicle, law,

@@ -16,6 +16,8 @@ from __future__ import annotations
 import argparse
 import json
 
+from fourws_cli._bounds import speed_mps
+from fourws_sim.errors import ParameterError
 from fourws_sim.params import load_vehicle
 
 HELP = "LQR rear-steer gains versus speed and weight q (JSON, table or plot)"
@@ -48,10 +50,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compute the sweep and print/plot it; returns the exit code."""
+    # scipy, control: not for --help
     from fourws_analysis.lqr_analysis import lqr_sweep, plot_lqr_gains
-    from fourws_cli._bounds import speed_mps
-    from fourws_control.lqr import LqrWeights
-    from fourws_sim.errors import ParameterError
+    from fourws_control.lqr import LqrWeights  # scipy: not for --help
 
     speeds = [speed_mps("--speeds", u) for u in args.speeds]
     # LQR weights (their signs are checked by LqrWeights and lqr_sweep): only their ratios

@@ -10,6 +10,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from fourws_cli._bounds import bounded
+from fourws_sim.errors import ParameterError
+
 HELP = "play a recorded bag back into the ROS 2 graph (all or chosen topics, rate, /clock)"
 
 
@@ -27,9 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Replay the bag; returns the node's exit code."""
-    from fourws_cli._bounds import bounded
-    from fourws_ros.replay_node import main
-    from fourws_sim.errors import ParameterError
+    from fourws_ros.replay_node import main  # rclpy: not for --help
 
     bounded("--rate", args.rate, 0.0, 1000.0, low_open=True)
     if not args.bag.is_dir():

@@ -27,6 +27,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from fourws_control import available_laws
+from fourws_sim.errors import ParameterError, UnknownNameError
+
 HELP = "run a scenario (default: config/scenarios/default.yaml) through the ROS 2 node graph"
 
 
@@ -56,13 +59,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scenario; returns the exit code."""
-    from fourws_control import available_laws
-    from fourws_ros.graph_run import run_graph
+    from fourws_ros.graph_run import run_graph  # rclpy: not for --help
+    # rosbags, mcap: not for --help
     from fourws_run.config import USER_LAW, ControllerSpec, RunConfig
-    from fourws_run.record import EXIT_CODES, Outcome
-    from fourws_run.scenario import load_scenario
-    from fourws_run.series import scenario_runs
-    from fourws_sim.errors import ParameterError, UnknownNameError
+    from fourws_run.record import EXIT_CODES, Outcome  # rosbags, mcap: not for --help
+    from fourws_run.scenario import load_scenario  # rosbags, mcap: not for --help
+    from fourws_run.series import scenario_runs  # rosbags, mcap: not for --help
 
     scenario = load_scenario(args.scenario)
     if args.clock:

@@ -26,6 +26,8 @@ import os
 import sys
 from pathlib import Path
 
+from fourws_sim.errors import FourwsError, ParameterError
+
 HELP = "sweeps and Monte Carlo over speed, laws and parameter error (all cores or Dask)"
 
 
@@ -57,8 +59,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the study (or rerun a point, or draw a report); returns the exit code."""
-    from fourws_sim.errors import ParameterError
-
     action = args.target[0]
     if action in ("rerun", "report"):
         if len(args.target) != 2:
@@ -74,9 +74,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _study(args: argparse.Namespace, target: str) -> int:
-    from fourws_study.execute import check_size, run_study
-    from fourws_study.report import write_study_report
-    from fourws_study.spec import load_study
+    from fourws_study.execute import check_size, run_study  # numba, pyarrow: not for --help
+    from fourws_study.report import write_study_report  # numba, pyarrow: not for --help
+    from fourws_study.spec import load_study  # numba, pyarrow: not for --help
 
     study = load_study(target)
     check_size(study, args.force)
@@ -113,18 +113,18 @@ def _study(args: argparse.Namespace, target: str) -> int:
 
 
 def _report(root: Path) -> int:
-    from fourws_study.report import write_study_report
-    from fourws_study.rerun import study_of
+    from fourws_study.report import write_study_report  # numba, pyarrow: not for --help
+    from fourws_study.rerun import study_of  # numba, pyarrow: not for --help
 
     print(f"report: {write_study_report(root, study_of(root))}")
     return 0
 
 
 def _rerun(args: argparse.Namespace, root: Path) -> int:
-    from fourws_ros.graph_run import run_graph
-    from fourws_run.record import Outcome
-    from fourws_sim.errors import FourwsError, ParameterError
-    from fourws_study.kernel import DURATION
+    from fourws_ros.graph_run import run_graph  # rclpy: not for --help
+    from fourws_run.record import Outcome  # rosbags, mcap: not for --help
+    from fourws_study.kernel import DURATION  # numba, pyarrow: not for --help
+    # numba, pyarrow: not for --help
     from fourws_study.rerun import bag_row, compare_rows, study_of, study_row
 
     if args.point is None:

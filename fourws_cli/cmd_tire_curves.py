@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from fourws_cli._bounds import bounded
 from fourws_sim.params import load_vehicle
 
 HELP = "normalized lateral tire force vs slip angle / slip ratio (Figures C.1, C.2)"
@@ -43,10 +44,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compute, print and optionally plot the curves; returns the exit code."""
+    # scipy, control: not for --help
     from fourws_analysis.tire_curves import plot_tire_curves, tire_curves
-    from fourws_sim.tires import cornering_stiffness, get_tire
-
-    from fourws_cli._bounds import bounded
+    from fourws_sim.tires import cornering_stiffness, get_tire  # numba: not for --help
 
     if args.fz_n is not None:
         bounded("--fz-n", args.fz_n, 0.0, 1e6, " N", low_open=True)

@@ -22,6 +22,7 @@ import pkgutil
 import sys
 
 import fourws_cli
+from fourws_cli.nodes import run_node
 from fourws_sim.errors import FourwsError, one_line
 
 #: Exit code of a user error: bad input, or an output that cannot be written.
@@ -54,7 +55,6 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     # `fourws node NAME ...` hands everything after NAME to the node untouched (--ros-args ...)
     if len(argv) >= 1 and argv[0] == "node":
-        from fourws_cli.nodes import run_node
         return run_node(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -52,10 +52,13 @@ from typing import Any
 from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetParametersResult)
 from rclpy.node import Node
 
+from fourws_control import RearSteerActuator, available_laws, make_loop_law
 from fourws_ros import conversions, reporting, topics
+from fourws_ros.runtime import run_node
 from fourws_run import codecs
 from fourws_run.ticks import StateGate, law_input
 from fourws_sim.errors import FourwsError, ParameterError
+from fourws_sim.params import load_vehicle, vehicle_from_mapping
 
 #: Longest rear-angle limit a parameter may set, rad (45 deg: beyond any rear-steer hardware).
 MAX_ANGLE_LIMIT_RAD = math.pi / 4
@@ -72,7 +75,6 @@ class ControllerNode(Node):
 
     def __init__(self, node_name: str = "fourws_controller") -> None:
         super().__init__(node_name)
-        from fourws_control import available_laws
 
         self.declare_parameter("law", "fws", ParameterDescriptor(
             description=f"rear-steer law, one of: {', '.join(available_laws())}"))
@@ -163,9 +165,6 @@ class ControllerNode(Node):
 
     def _build(self, values: dict[str, Any], keep_angle: float | None) -> tuple[Any, Any]:
         """Law and actuator from parameter values; raises FourwsError on bad values."""
-        from fourws_control import RearSteerActuator, make_loop_law
-        from fourws_sim.params import load_vehicle, vehicle_from_mapping
-
         try:
             options = json.loads(values["law_options_json"] or "{}")
         except json.JSONDecodeError as exc:
@@ -222,8 +221,6 @@ class ControllerNode(Node):
 
     def _publish_config(self) -> None:
         """What this controller runs with, on ``/fourws/node_config`` (latched)."""
-        import json
-
         values = getattr(self, "_values", None) or {
             p: self.get_parameter(p).value for p in self._BUILD_PARAMS}
         msg = topics.message_class(topics.NODE_CONFIG)()
@@ -333,7 +330,6 @@ class ControllerNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``controller``."""
-    from fourws_ros.runtime import run_node
     return run_node(ControllerNode, args, name="fourws_controller")
 
 

@@ -15,6 +15,7 @@ used — lockstep runs are then bit-identical to :func:`fourws_run.closed_loop.r
 
 from __future__ import annotations
 
+import json
 import math
 from typing import Any, Mapping
 
@@ -24,7 +25,9 @@ from fourws_run.codecs import (IMU_FIELDS, ODOMETRY_FIELDS, check_finite_mapping
                                odometry_values, outputs_finite)
 from fourws_run.interface import (FRAME_BODY, FRAME_ODOM, NS_PER_S, STATE_SCALARS, STATE_WHEELS,
                                   time_to_ns)
-from fourws_sim.errors import NonFiniteError
+from fourws_sim.drivers import DriverCommand
+from fourws_sim.errors import NonFiniteError, ParameterError
+from fourws_sim.params import load_vehicle, vehicle_from_mapping
 
 
 # ---------------------------------------------------------------------------- parameters
@@ -38,11 +41,6 @@ def vehicle_from_params(node: Any, name_param: str = "vehicle",
     fourws_sim.errors.ParameterError
         Bad JSON or an invalid vehicle (names the parameter).
     """
-    import json
-
-    from fourws_sim.errors import ParameterError
-    from fourws_sim.params import load_vehicle, vehicle_from_mapping
-
     text = str(node.get_parameter(json_param).value)
     if not text:
         return load_vehicle(str(node.get_parameter(name_param).value))
@@ -83,6 +81,7 @@ def state_msg(outputs: Mapping[str, Any], *, time_s: float, step: int, model: st
     NonFiniteError
         If any value is NaN or infinite (nothing non-finite leaves a node).
     """
+    # message classes (45 modules): nodes send raw CDR; only replay and tests build them
     from fourws.msg import VehicleState
 
     bad = outputs_finite(outputs)
@@ -116,6 +115,7 @@ def state_to_outputs(msg: Any) -> dict[str, Any]:
 # ---------------------------------------------------------------------------- driver input
 def driver_msg(cmd: Any, time_s: float, msg: Any = None) -> Any:
     """``DriverInput`` from a :class:`fourws_sim.drivers.DriverCommand` at ``time_s``."""
+    # message classes (45 modules): nodes send raw CDR; only replay and tests build them
     from fourws.msg import DriverInput
 
     values = cmd.to_dict()
@@ -142,8 +142,6 @@ def driver_command(msg: Any) -> Any:
     NonFiniteError
         If a field is NaN or infinite (names the field).
     """
-    from fourws_sim.drivers import DriverCommand
-
     cmd = DriverCommand(
         steering_wheel_angle_rad=float(msg.steering_wheel_angle_rad),
         front_wheel_angle_rad=float(msg.front_wheel_angle_rad),
@@ -162,6 +160,7 @@ def rear_cmd_msg(angle_rad: float, rate_radps: float, law: str, state_stamp_ns: 
                  state_step: int, msg: Any = None) -> Any:
     """``RearSteerCommand`` answering the state stamped ``state_stamp_ns`` (ns) with step
     ``state_step``."""
+    # message classes (45 modules): nodes send raw CDR; only replay and tests build them
     from fourws.msg import RearSteerCommand
 
     if not (math.isfinite(angle_rad) and math.isfinite(rate_radps)):
@@ -203,6 +202,7 @@ def _set_fields(msg: Any, names: tuple[str, ...], values: tuple[float, ...]) -> 
 def odometry_msg(state: Any, msg: Any = None) -> Any:
     """``nav_msgs/Odometry`` of the body (``base_link``) in ``odom`` from a ``VehicleState``
     (the fields of :func:`fourws_run.codecs.odometry_values`)."""
+    # message classes (45 modules): nodes send raw CDR; only replay and tests build them
     from nav_msgs.msg import Odometry
 
     m = Odometry() if msg is None else msg
@@ -216,6 +216,7 @@ def odometry_msg(state: Any, msg: Any = None) -> Any:
 def imu_msg(state: Any, msg: Any = None) -> Any:
     """``sensor_msgs/Imu`` at the CG from a ``VehicleState`` (the fields of
     :func:`fourws_run.codecs.imu_values`)."""
+    # message classes (45 modules): nodes send raw CDR; only replay and tests build them
     from sensor_msgs.msg import Imu
 
     m = Imu() if msg is None else msg
@@ -227,6 +228,7 @@ def imu_msg(state: Any, msg: Any = None) -> Any:
 
 def clock_msg(time_s: float, msg: Any = None) -> Any:
     """``rosgraph_msgs/Clock`` at ``time_s``."""
+    # message classes (45 modules): nodes send raw CDR; only replay and tests build them
     from rosgraph_msgs.msg import Clock
 
     m = Clock() if msg is None else msg

@@ -23,6 +23,7 @@ nodes (publisher identity from rclpy message info): a foreign status cannot end 
 
 from __future__ import annotations
 
+import os
 import shutil
 import signal
 import sys
@@ -30,6 +31,13 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
+from std_msgs.msg import String
+from std_srvs.srv import SetBool
 
 from fourws_ros import node_params, topics
 from fourws_ros.domains import DomainError, domain_for_run, graph_env
@@ -116,15 +124,6 @@ class _LauncherNode:
 
     def __init__(self, domain_id: int, config_json: str, writers: dict[Role, str],
                  state: _RunState) -> None:
-        import os
-
-        import rclpy
-        from rclpy.context import Context
-        from rclpy.executors import SingleThreadedExecutor
-        from rclpy.signals import SignalHandlerOptions
-        from std_msgs.msg import String
-        from std_srvs.srv import SetBool
-
         # the domain goes to rclpy.init; the process environment keeps the user's
         # ROS_DOMAIN_ID (a later run in this process must see what the user set, not ours)
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
@@ -208,8 +207,6 @@ class _LauncherNode:
 
     def start_simulation(self) -> bool:
         """Un-pause the simulator; False if it did not answer."""
-        from std_srvs.srv import SetBool
-
         future = self.pause.call_async(SetBool.Request(data=False))
         self.executor.spin_until_future_complete(future, timeout_sec=10.0)
         return future.done()

@@ -40,9 +40,11 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 
 from fourws_ros import conversions, reporting, topics
+from fourws_ros.runtime import run_node
 from fourws_run import codecs
 from fourws_run.ticks import StateGate
 from fourws_sim.errors import FourwsError, ParameterError
+from fourws_sim.maneuvers import make_maneuver
 
 #: Progress status every this many integration steps (0.1 s at 1 kHz), besides phase events.
 STATUS_EVERY_STEPS = 100
@@ -54,7 +56,6 @@ class ManeuverNode(Node):
 
     def __init__(self) -> None:
         super().__init__("fourws_maneuver")
-        from fourws_sim.maneuvers import make_maneuver
 
         ro = dict(read_only=True)
         period = [FloatingPointRange(from_value=1e-5, to_value=1.0)]
@@ -198,7 +199,6 @@ class ManeuverNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``maneuver``."""
-    from fourws_ros.runtime import run_node
     return run_node(ManeuverNode, args, name="fourws_maneuver")
 
 

@@ -13,6 +13,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from fourws_ros import topics
 from fourws_run.config import RunConfig
 
@@ -98,8 +100,6 @@ def write_params_file(path: Path, node_params: dict[str, dict[str, Any]]) -> Pat
     OSError
         The file cannot be written.
     """
-    import yaml
-
     data = {node: {"ros__parameters": params} for node, params in node_params.items()}
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     return path

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -143,8 +144,6 @@ def describe_exit(child: Child, with_log: bool = True) -> str:
 def _last_line(text: str) -> str:
     """The last meaningful line of a node's log (a Python traceback's last line is its
     error), without terminal colour codes, at most 300 characters."""
-    import re
-
     lines = [re.sub(r"\x1b\[[0-9;]*m", "", ln).strip() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln and not ln.startswith("^")]
     return lines[-1][:300] if lines else ''

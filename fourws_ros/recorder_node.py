@@ -50,10 +50,13 @@ from pathlib import Path
 from typing import Any, Callable
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
 
 from fourws_ros import topics
 from fourws_ros.identity import PublisherNames, drain, publisher_gid
+from fourws_ros.runtime import EXIT_INCOMPLETE, SPIN_TIMEOUT_S, run_node
 from fourws_run.accounting import Ledger
 from fourws_run.bagfile import BagError, BagWriter
 from fourws_run.cdr import stamp_ns
@@ -230,8 +233,6 @@ class RecorderNode(Node):
     def _fail(self, exc: OSError) -> None:
         """The bag cannot be written (disk full, file system gone read-only): stop with the
         reason; what the last flush put on disk stays readable (`fourws bag repair`)."""
-        from fourws_ros.runtime import EXIT_INCOMPLETE
-
         self._failed = True
         self.closed = True
         self.stop_reason = f"cannot write the bag {self.bag.path}: {exc.strerror or exc}"
@@ -244,8 +245,6 @@ class RecorderNode(Node):
             pass
 
     def _read_report(self, topic: str, node: str, data: bytes) -> None:
-        from rclpy.serialization import deserialize_message
-
         try:
             msg = deserialize_message(data, topics.message_class(topic))
         except Exception as exc:  # noqa: BLE001 - rclpy raises several types on bad bytes
@@ -341,8 +340,6 @@ class RecorderNode(Node):
             return
         self.closed = True
         if not account.complete:
-            from fourws_ros.runtime import EXIT_INCOMPLETE
-
             self.stop_reason = f"bag closed incomplete: {account.summary()}"
             self.exit_code = EXIT_INCOMPLETE
         self._publish_status()
@@ -356,8 +353,6 @@ class RecorderNode(Node):
 
     def on_shutdown(self, executor: Any) -> None:
         """Drain what DDS still holds for us, then close the bag with the accounting."""
-        from fourws_ros.runtime import SPIN_TIMEOUT_S
-
         if not self.closed:
             quiet = float(self.get_parameter("drain_quiet_s").value)
             start = self._last_rx = time.monotonic()
@@ -370,13 +365,11 @@ class RecorderNode(Node):
 
 
 def _steady_clock() -> Any:
-    from rclpy.clock import Clock, ClockType
     return Clock(clock_type=ClockType.STEADY_TIME)
 
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``recorder``."""
-    from fourws_ros.runtime import run_node
     return run_node(RecorderNode, args, name="fourws_recorder")
 
 

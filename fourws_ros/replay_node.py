@@ -43,8 +43,10 @@ from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rclpy.node import Node
+from rosbags.rosbag2 import Reader, ReaderError
 
 from fourws_ros import conversions, reporting, topics
+from fourws_ros.runtime import run_node
 from fourws_run.cdr import stamp_ns
 from fourws_run.ticks import Rejections
 from fourws_sim.errors import ParameterError
@@ -64,8 +66,6 @@ def read_bag_raw(path: Path, wanted: list[str] | None) -> list[tuple[int, str, b
     ParameterError
         If the bag cannot be read (names the path).
     """
-    from rosbags.rosbag2 import Reader, ReaderError
-
     try:
         with Reader(path) as reader:
             conns = [c for c in reader.connections
@@ -202,7 +202,6 @@ class ReplayNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``replay``."""
-    from fourws_ros.runtime import run_node
     return run_node(ReplayNode, args, name="fourws_replay")
 
 

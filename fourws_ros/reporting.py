@@ -13,9 +13,11 @@ published (:func:`wait_delivered`), so no message dies with the process.
 from __future__ import annotations
 
 import json
+import time
 from typing import Any, Mapping
 
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.duration import Duration
 
 from fourws_ros import topics
 from fourws_run.interface import WRITER_ROLES
@@ -193,15 +195,11 @@ class RecorderWatch:
     def update(self, msg: Any) -> None:
         """Take a ``RecorderStatus`` (the subscription calls it; a node that subscribes itself
         passes the messages on)."""
-        import time
-
         self.stored = dict(zip(msg.topics, (int(n) for n in msg.stored)))
         self._heard = time.monotonic()
 
     def silent(self) -> bool:
         """A recorder was heard, and has been silent for :attr:`SILENT_S` since."""
-        import time
-
         return self.stored is not None and time.monotonic() - self._heard > self.SILENT_S
 
     def holds(self, counts: Mapping[str, int]) -> bool:
@@ -223,10 +221,6 @@ def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
     simulator needs the maneuver's last status, the recorder everything). Gives up, False
     with an error logged, after ``timeout_s`` or once the recorder has gone silent (a killed
     recorder's readers stay in the graph for seconds and never acknowledge)."""
-    import time
-
-    from rclpy.duration import Duration
-
     deadline = time.monotonic() + timeout_s
     now = Duration(seconds=0)
     while True:

@@ -22,12 +22,21 @@ the context shuts down.
 
 from __future__ import annotations
 
+import os
 import re
 import signal
 import sys
 from typing import Any, Callable, Sequence
 
-from fourws_sim.errors import one_line
+import rclpy
+from rclpy.exceptions import NameValidationException, ParameterException
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation
+from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
+
+from fourws_sim.config_yaml import read_yaml
+from fourws_sim.errors import FourwsError, one_line
 
 EXIT_OK = 0
 EXIT_CRASH = 1
@@ -66,8 +75,6 @@ def check_params_files(argv: Sequence[str]) -> None:
     fourws_sim.errors.ParameterError
         A parameter file that is missing, not UTF-8, not valid YAML, or has a duplicate key.
     """
-    from fourws_sim.config_yaml import read_yaml
-
     for flag, value in zip(argv, argv[1:]):
         if flag == "--params-file":
             read_yaml(value)
@@ -79,15 +86,13 @@ def make_executor(context: Any = None, message_info: bool = False) -> Any:
 
     ``message_info``: the node's callbacks take rclpy message info (publisher identity and
     sequence number), which only the single-threaded executor delivers."""
-    import os
-
     if not message_info and os.environ.get("FOURWS_EXECUTOR", "events") == "events":
         try:
+            # optional: rclpy builds without the C++ events executor
             from rclpy.experimental import EventsExecutor
             return EventsExecutor(context=context)
         except ImportError:
             pass
-    from rclpy.executors import SingleThreadedExecutor
     return SingleThreadedExecutor(context=context)
 
 
@@ -115,15 +120,6 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     int
         Exit code (see module docstring).
     """
-    import rclpy
-    from rclpy.signals import SignalHandlerOptions
-    from rclpy.task import Future
-
-    from rclpy.exceptions import NameValidationException, ParameterException
-    from rclpy.impl.implementation_singleton import rclpy_implementation
-
-    from fourws_sim.errors import FourwsError
-
     rcl_error = rclpy_implementation.RCLError
     argv = list(args) if args is not None else list(sys.argv)
     try:

@@ -52,8 +52,11 @@ starts paused (the launcher un-pauses it once the graph is complete).
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
+import gc
 import math
+import os
 import sys
 import threading
 import time
@@ -62,13 +65,17 @@ from typing import Any
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
 from rclpy.node import Node
+from std_srvs.srv import SetBool, Trigger
 
 from fourws_ros import conversions, reporting, topics
+from fourws_ros.runtime import run_node
 from fourws_run import codecs
 from fourws_run.ticks import (FlowWindow, InputLimits, LockstepAnswers, Pacer, RealtimeAnswers,
                               Tick, TickEngine, whole_multiple)
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.params import Tire
+from fourws_sim.simulator import Simulator
 
 CLOCK_MODES = ("lockstep", "realtime")
 #: Shortest/longest integration step a parameter may set, s.
@@ -181,8 +188,7 @@ class SimulatorNode(Node):
         return self.get_parameter(name).value
 
     def _build_core(self) -> None:
-        from fourws_sim.params import Tire
-        from fourws_sim.simulator import Simulator
+        # numba (about 0.5 s) only once the parameters are valid: a bad file fails fast
         from fourws_sim.tires import TIRES
 
         self.clock_mode = str(self._param("clock_mode"))
@@ -212,8 +218,6 @@ class SimulatorNode(Node):
         self.limits = InputLimits.for_vehicle(vehicle)
 
     def _create_ros_interfaces(self) -> None:
-        from std_srvs.srv import SetBool, Trigger
-
         msg = topics.message_class
         self.counts = reporting.PublishCounts()
         self.state_pub = self.counts.publisher(self, topics.STATE)
@@ -593,8 +597,6 @@ class SimulatorNode(Node):
 
     # -- realtime
     def _realtime_loop(self) -> None:
-        import gc
-
         # Objects alive now (modules, numba, rclpy) leave the collector's generations, so a
         # full collection during the run has little to scan (it holds the GIL meanwhile).
         gc.collect()
@@ -688,9 +690,6 @@ class SimulatorNode(Node):
 
 def _make_thread_realtime(priority: int, logger: Any) -> None:
     """SCHED_FIFO for the calling thread and 1 ns timer slack (sleep wakes on time)."""
-    import ctypes
-    import os
-
     pr_set_timerslack = 29
     try:
         ctypes.CDLL(None).prctl(pr_set_timerslack, 1, 0, 0, 0)
@@ -707,7 +706,6 @@ def _make_thread_realtime(priority: int, logger: Any) -> None:
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``simulator``."""
-    from fourws_ros.runtime import run_node
     return run_node(SimulatorNode, args, name="fourws_simulator")
 
 

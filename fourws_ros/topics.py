@@ -22,6 +22,8 @@ QoS choice (why):
 
 from __future__ import annotations
 
+import importlib
+
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from fourws_run.interface import (CLOCK, DRIVER_INPUT, FRAME_BODY, FRAME_ODOM, IMU,
@@ -84,8 +86,6 @@ def message_class(topic: str) -> type:
     KeyError
         If ``topic`` is not a graph topic.
     """
-    import importlib
-
     package, _, name = TOPIC_TYPES[topic].split("/")
     return getattr(importlib.import_module(f"{package}.msg"), name)
 

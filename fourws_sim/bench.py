@@ -37,6 +37,9 @@ from typing import Any
 
 import numpy as np
 
+from fourws_sim.models.eightdof import INPUT
+from fourws_sim.simulator import Simulator
+
 #: Speed of the benchmark maneuver, m/s (85 km/h, the paper's chapter-8 speed).
 BENCH_SPEED_MPS = 85.0 / 3.6
 #: Front road-wheel angle of the step steer, rad (about 0.3 g at 85 km/h on table_8_1).
@@ -103,16 +106,12 @@ def run_benchmark(vehicle: str = "table_8_1", sim_seconds: float = 20.0,
     """
     cpu = _pin_one_core() if pin else None
     t0 = time.perf_counter()
-    from fourws_sim.simulator import Simulator
-
     sim = Simulator(vehicle, model="8dof", integrator="rk4", dt_s=BENCH_STEP_S, tire=tire)
     sim.reset(speed_mps=BENCH_SPEED_MPS)
     u = sim.input_vector(np.zeros(len(sim.model.INPUT)))
     sim.step(u, 1)
     sim.outputs()
     first_use = time.perf_counter() - t0
-
-    from fourws_sim.models.eightdof import INPUT
 
     u = np.zeros(len(INPUT))
     u[INPUT.DELTA_F] = BENCH_STEER_RAD

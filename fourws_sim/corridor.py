@@ -114,6 +114,7 @@ def plan_corridor_path(sections: Sequence[tuple[float, float, float, float]],
     NonFiniteError
         The linear program failed (not expected: ``y = 0`` is always feasible).
     """
+    # scipy.optimize and scipy.sparse load in about 0.3 s; only a corridor fit needs them
     import scipy.optimize
     import scipy.sparse as sp
 

@@ -330,7 +330,7 @@ class SplinePath:
     """
 
     def __init__(self, x_m: Any, y_m: Any, margin_m: float = math.nan) -> None:
-        from scipy.interpolate import CubicSpline
+        from scipy.interpolate import CubicSpline  # scipy: only a path driver needs it
 
         x = np.asarray(x_m, dtype=float)
         y = np.asarray(y_m, dtype=float)

@@ -117,7 +117,7 @@ def _euler(f: Derivative, t: float, x: np.ndarray, u: np.ndarray, p: Any, dt: fl
 
 def _solve_ivp(f: Derivative, t: float, x: np.ndarray, u: np.ndarray, p: Any, dt: float,
                n: int) -> np.ndarray:
-    from scipy.integrate import solve_ivp
+    from scipy.integrate import solve_ivp  # scipy: only the offline reference needs it
 
     if n == 0:
         return x

@@ -32,7 +32,10 @@ import numpy as np
 
 from fourws_sim.errors import DivergedError, NonFiniteError, ParameterError
 from fourws_sim.integrators import DEFAULT_STEP_S, get_integrator
-from fourws_sim.models import get_model
+from fourws_sim.models import eightdof, get_model
+from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA_F, _AUX_DELTA_R,
+                                        _AUX_FX, _AUX_FY, _AUX_FZ, _AUX_KAPPA, _AUX_MZ, STATE,
+                                        evaluate)
 from fourws_sim.params import N_WHEELS, Vehicle, load_vehicle
 
 #: Forward speed of the linear models when :meth:`Simulator.reset` gets none, m/s: the
@@ -77,10 +80,8 @@ class Inputs:
 
 def _field_names() -> list[str]:
     """Input field name of each 8-DOF input slot (for error messages)."""
-    from fourws_sim.models.eightdof import INPUT
-
     names = []
-    for member in INPUT:
+    for member in eightdof.INPUT:
         n = member.name
         if n == "DELTA_F":
             names.append("front_wheel_angle_rad")
@@ -138,8 +139,6 @@ class Simulator:
         self._u_held = np.zeros(self._n_input)  # the fast path's held input (see step)
         self._kernel = None
         if self._is_8dof:
-            from fourws_sim.models import eightdof
-
             self._p = eightdof.params_for(self.vehicle, tire,
                                           free_steering=model == EIGHT_DOF_FREE)
             # a wheel too light for the step is refused here, not found diverging later
@@ -180,8 +179,6 @@ class Simulator:
             If the speed is not finite (8-DOF) or not > 0 (linear models).
         """
         if self._is_8dof:
-            from fourws_sim.models import eightdof
-
             speed = 0.0 if speed_mps is None else speed_mps
             if isinstance(speed, bool) or not isinstance(speed, (int, float, np.floating)) \
                     or not math.isfinite(speed):
@@ -368,8 +365,6 @@ class Simulator:
         step's sub-steps), which turns overflow into NaN where the NumPy reference's ``math``
         calls would raise.
         """
-        from fourws_sim.models import eightdof
-
         rhs = self._kernels.rhs
         dx = np.zeros(eightdof.N_STATE)
         aux = np.zeros(eightdof.N_AUX)
@@ -433,10 +428,6 @@ class Simulator:
         return self._outputs_linear()
 
     def _outputs_8dof(self) -> dict[str, Any]:
-        from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA_F,
-                                                _AUX_DELTA_R, _AUX_FX, _AUX_FY, _AUX_FZ,
-                                                _AUX_KAPPA, _AUX_MZ, STATE, evaluate)
-
         x = self._x
         if self._kernel is not None:
             self._kernels.rhs(x, self._u, self._q, self._cf, self._cr, self._dx, self._aux)

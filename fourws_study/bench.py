@@ -95,6 +95,7 @@ def _study_run(study: Study, out: Path, **kw: Any) -> dict[str, float]:
 def _dask(study: Study, tmp: Path, workers: int, tasks: int) -> dict[str, float]:
     """The study twice on one LocalCluster (the first run loads fourws into the workers),
     and the round trip of an empty task."""
+    # distributed: about 0.5 s to load; only the dask backend needs it
     from distributed import Client, LocalCluster
 
     t0 = time.perf_counter()

@@ -144,6 +144,7 @@ def _dask_client(workers: int, scheduler: str | None) -> Any:
     """A Dask distributed client: of the cluster at ``scheduler``, or of a new LocalCluster
     with ``workers`` single-threaded worker processes."""
     try:
+        # distributed: about 0.5 s to load; only the dask backend needs it
         from distributed import Client, LocalCluster
     except ImportError:
         raise ParameterError("--backend", "dask needs the 'dask[distributed]' package "
@@ -192,6 +193,7 @@ def _local_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
 def _dask_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
                 scheduler: str | None, compiled: bool) -> Iterator[tuple[int, pa.Table]]:
     """Run blocks on Dask; yields (block, table) as each finishes."""
+    # distributed: about 0.5 s to load; only the dask backend needs it
     from distributed import as_completed
 
     client = _dask_client(workers, scheduler)

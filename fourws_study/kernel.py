@@ -38,10 +38,13 @@ from types import ModuleType
 import numpy as np
 
 from fourws_control import Law, RearSteerActuator, make_loop_law
+from fourws_control import base, ff_zero_sideslip, fws, lqr, rwc_3dof, sol1, sol2
 from fourws_run.closed_loop import ClosedLoopResult, run_twin
 from fourws_run.config import RunConfig
 from fourws_run.ticks import InputLimits, whole_multiple
+from fourws_sim import drivers
 from fourws_sim.maneuvers import Maneuver, make_maneuver
+from fourws_sim.models import eightdof
 
 #: Maneuver types whose steering depends on time only and whose driver holds the initial speed
 #: throughout (the compiled path takes them; the others need the interpreted twin).
@@ -66,10 +69,8 @@ def _register_plain_functions() -> None:
     global _REGISTERED
     if _REGISTERED:
         return
+    # numba: the compiled loop only (the interpreted twin runs without it)
     from numba.extending import register_jitable
-
-    from fourws_control import base, ff_zero_sideslip, fws, lqr, rwc_3dof, sol1, sol2
-    from fourws_sim import drivers
 
     for fn in (base.gain_speed, base.rear_angle_of, base.actuator_step, fws.fws_gains,
                sol1.sol1_gains, sol2.sol2_gains, ff_zero_sideslip.zero_sideslip_ratio,
@@ -91,6 +92,7 @@ def loop_kernel_for(tire_name: str) -> ModuleType:
         Unknown tire model.
     """
     if tire_name not in _LOADED:
+        # numba: the compiled loop only (the interpreted twin runs without it)
         from fourws_sim.tires import get_tire
         from fourws_study import loop_kernels
 
@@ -168,6 +170,7 @@ def compiled_plan(config: RunConfig, law: Law | None = None) -> str:
     if config.maneuver.type not in TIME_STEERED:
         return f"maneuver type {config.maneuver.type} (its driver steers from the state)"
     if law is not None:
+        # numba: the compiled loop only (the interpreted twin runs without it)
         from fourws_study.loop_kernels import LAW_FUNCTIONS
 
         gains = law.gain_function()
@@ -178,6 +181,7 @@ def compiled_plan(config: RunConfig, law: Law | None = None) -> str:
 
 def twin_record(result: ClosedLoopResult, fallback: str = "") -> LoopRecord:
     """A :class:`LoopRecord` of the interpreted twin's result."""
+    # numba: the compiled loop only (the interpreted twin runs without it)
     from fourws_study.loop_kernels import CHANNELS
 
     out = result.outputs
@@ -192,6 +196,7 @@ def twin_record(result: ClosedLoopResult, fallback: str = "") -> LoopRecord:
     drive, brake = result.driver["drive_torque_nm"], result.driver["brake_torque_nm"]
     channels["drive_torque_total_nm"] = drive[:, 0] + drive[:, 1] + drive[:, 2] + drive[:, 3]
     channels["brake_torque_total_nm"] = brake[:, 0] + brake[:, 1] + brake[:, 2] + brake[:, 3]
+    # numba: the compiled loop only (the interpreted twin runs without it)
     from fourws_study.loop_kernels import STATE_CHANNELS
 
     final = None if result.diverged else {
@@ -255,8 +260,6 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     law : Law
         The run's law (:func:`build_law`; shared by the points of one belief).
     """
-    from fourws_sim.models import eightdof
-
     why = compiled_plan(config, law)
     if why:
         return why

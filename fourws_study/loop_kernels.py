@@ -36,16 +36,26 @@ import numba
 import numpy as np
 
 from fourws_control.base import actuator_step, gain_speed, rear_angle_of
+import fourws_control.base
 from fourws_control.ff_zero_sideslip import fixed_ratio_gains, zero_sideslip_gains
+import fourws_control.ff_zero_sideslip
 from fourws_control.fws import fws_gains
+import fourws_control.fws
 from fourws_control.lqr import table_gains
+import fourws_control.lqr
 from fourws_control.rwc_3dof import rwc1_gains, rwc2_gains, rwc4_gains
+import fourws_control.rwc_3dof
 from fourws_control.sol1 import sol1_gains
+import fourws_control.sol1
 from fourws_control.sol2 import sol2_gains
+import fourws_control.sol2
 from fourws_sim.drivers import speed_hold_request, split_brake_torque
+import fourws_sim.drivers
+from fourws_sim.models import eightdof, eightdof_kernels
 from fourws_sim.models.eightdof import (INPUT, N_AUX, N_INPUT, N_STATE, STATE, aux_from_array,
                                         kernels_for)
 from fourws_sim.params import GRAVITY_MPS2
+from fourws_sim.tires import get_tire
 
 #: Tire model of this variant (set by ``loop_kernel_for`` before the module body runs).
 TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
@@ -266,17 +276,6 @@ def _source_digest() -> str:
     kernels, the tire, and the law, actuator and driver functions it calls. numba checks only
     the stamp of a function's own file, so without it an edited law or driver would run from
     a stale cache."""
-    import fourws_control.base
-    import fourws_control.ff_zero_sideslip
-    import fourws_control.fws
-    import fourws_control.lqr
-    import fourws_control.rwc_3dof
-    import fourws_control.sol1
-    import fourws_control.sol2
-    import fourws_sim.drivers
-    from fourws_sim.models import eightdof, eightdof_kernels
-    from fourws_sim.tires import get_tire
-
     digest = hashlib.sha1()
     digest.update(Path(__file__).read_bytes())
     digest.update(repr(sorted(JIT_OPTIONS.items())).encode())

@@ -36,7 +36,7 @@ import scipy.optimize
 from fourws_analysis import compare, linear
 from fourws_analysis.report import REPORT_CSS
 from fourws_sim.errors import FourwsError
-from fourws_study.point import law_for, linear_model_of
+from fourws_study.point import ZERO_MODE_PER_S, law_for, linear_model_of
 from fourws_study.spec import KMH_PER_MPS, Axis, Study
 from fourws_study.store import read_results
 
@@ -61,10 +61,10 @@ SPEED_AXES = {"speed_kmh": KMH_PER_MPS, "speed_mps": 1.0}
 
 
 def _plt() -> Any:
-    import matplotlib
+    import matplotlib  # matplotlib: about 0.5 s to load, only the plots need it
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: about 0.5 s to load, only the plots need it
 
     plt.rcParams.update({"figure.dpi": 110, "font.size": 9, "axes.spines.top": False,
                          "axes.spines.right": False, "legend.fontsize": 8})
@@ -113,8 +113,6 @@ def critical_speed_8dof_lin(vehicle: Any, law: Any, belief: Any, options: Any,
     ``samples`` speeds, refined with brentq (to 1e-4 m/s), or with ``refine`` False
     interpolated linearly between the two samples (for drawing); ``lo`` if it is unstable
     there, None if stable throughout."""
-    from fourws_study.point import ZERO_MODE_PER_S
-
     def margin(u: float) -> float:
         eig = np.linalg.eigvals(compare.eightdof_linear_system(vehicle, u, law, belief,
                                                                options).A)
@@ -206,6 +204,7 @@ def figure_stability(study: Study, table: pa.Table, law: str, rows: np.ndarray,
                      boundaries: bool = True) -> Any:
     """The stability map figure of one law (module docstring)."""
     plt = _plt()
+    # matplotlib: about 0.5 s to load, only the plots need it
     from matplotlib.colors import LinearSegmentedColormap
 
     cmap = LinearSegmentedColormap.from_list("okbad", ["#4caf50", "#ffc107", "#e53935"])
@@ -354,7 +353,7 @@ def _fmt(v: Any) -> str:
 
 
 def _save(fig: Any, path: Path) -> Path:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: about 0.5 s to load, only the plots need it
 
     fig.savefig(path)
     plt.close(fig)

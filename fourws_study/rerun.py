@@ -29,7 +29,7 @@ from fourws_sim.errors import ParameterError
 from fourws_study.kernel import DURATION, LoopRecord
 from fourws_study.point import evaluate, law_for, point_row
 from fourws_study.spec import Study, load_study
-from fourws_study.store import MANIFEST, study_hash
+from fourws_study.store import MANIFEST, read_results, study_hash
 
 #: Columns of a row that describe the computation, not the run (left out of comparisons).
 NOT_COMPARED = ("engine", "fallback", "wall_time_s", "metrics_json", "end_reason")
@@ -62,8 +62,6 @@ def study_row(root: str | Path, point: int) -> dict[str, Any]:
     ParameterError
         The point has not been run.
     """
-    from fourws_study.store import read_results
-
     table = read_results(root)
     rows = table.filter(pc.equal(table.column("point"), point)).to_pylist()
     if not rows:
@@ -86,6 +84,7 @@ def record_from_bag(path: str | Path, end_reason: str = DURATION) -> LoopRecord:
     BagError
         The bag cannot be read or lacks the state, driver or command stream.
     """
+    # numba: loop_kernels compiles the loop; only a bag's record needs its channel names
     from fourws_study.loop_kernels import CHANNELS, STATE_CHANNELS
 
     run = load_bag(path)

@@ -72,11 +72,13 @@ from typing import Any, Iterator, Mapping, Sequence
 import numpy as np
 import yaml
 
+from fourws_control import make_loop_law
 from fourws_control.registry import LAWS
 from fourws_run.config import RunConfig, software_versions
 from fourws_run.scenario import Scenario, load_scenario, scenario_from_mapping
 from fourws_sim.errors import FourwsError, ParameterError, UnknownNameError
 from fourws_sim.maneuvers import ManeuverSpec, maneuver_spec_from_mapping
+from fourws_sim.models import eightdof
 from fourws_sim.params import (CONFIG_DIR, load_vehicle, resolve_config_path,
                                vehicle_from_mapping)
 
@@ -158,6 +160,7 @@ class Distribution:
         return self._bounds()
 
     def _cdf_range(self) -> tuple[float, float]:
+        # scipy.special: about 0.2 s to load; only a truncated normal axis needs it
         from scipy.special import ndtr
 
         lo, hi = self._bounds()
@@ -173,6 +176,7 @@ class Distribution:
     def draw(self, u: float) -> float:
         """The value at uniform number ``u`` in [0, 1) (inverse CDF of the truncated
         distribution)."""
+        # scipy.special: about 0.2 s to load; only a truncated normal axis needs it
         from scipy.special import ndtri
 
         p_lo, p_hi = self._cdf_range()
@@ -880,9 +884,6 @@ def _report(data: Any, grid: tuple[Axis, ...], source: str) -> ReportSpec:
 
 def _validate_points(study: Study) -> None:
     """Build and check the runs of the study before any of it runs (module docstring)."""
-    from fourws_control import make_loop_law
-    from fourws_sim.models import eightdof
-
     base = study.base
     sc = base.scenario
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -33,6 +34,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import yaml
 
+from fourws_run.config import software_versions
 from fourws_sim.errors import ParameterError
 from fourws_study.point import columns
 from fourws_study.spec import Study
@@ -75,10 +77,6 @@ def study_hash(study: Study) -> str:
 
 def software_versions_all() -> dict[str, str]:
     """Versions of the software a study uses."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    from fourws_run.config import software_versions
-
     out = software_versions()
     for dist in ("numba", "scipy", "pyarrow", "dask", "distributed"):
         try:

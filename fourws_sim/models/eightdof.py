@@ -171,8 +171,11 @@ they agree to round-off.
 
 from __future__ import annotations
 
+import importlib.util
 import math
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 from enum import IntEnum
 from types import ModuleType
 from typing import Any, Callable, NamedTuple
@@ -403,7 +406,7 @@ def steering_wheel_angle(road_wheel_angle_rad: float, vehicle: Vehicle) -> float
 
 
 def _tire_module(vehicle: Vehicle, tire: str | None) -> tuple[str, ModuleType]:
-    from fourws_sim.tires import get_tire
+    from fourws_sim.tires import get_tire  # numba: the tires load it (about 0.5 s)
 
     name = tire if tire is not None else (vehicle.tire.model if vehicle.tire else "linear")
     return name, get_tire(name)
@@ -820,6 +823,9 @@ class Kernels(NamedTuple):
 
 
 _KERNEL_CACHE: dict[str, Kernels] = {}
+#: The kernel source, loaded by file (it imports this module's slots: never the reverse).
+_KERNELS_MODULE = f"{__package__}.eightdof_kernels"
+_KERNELS_FILE = Path(__file__).with_name("eightdof_kernels.py")
 
 
 def kernels_for(tire_name: str) -> Kernels:
@@ -837,17 +843,13 @@ def kernels_for(tire_name: str) -> Kernels:
         If ``tire_name`` is not a known tire model.
     """
     if tire_name not in _KERNEL_CACHE:
-        import importlib.util
-        import sys
-
-        from fourws_sim.models import eightdof_kernels
-        from fourws_sim.tires import get_tire
+        from fourws_sim.tires import get_tire  # numba: the tires load it (about 0.5 s)
 
         get_tire(tire_name)  # raise UnknownNameError before building anything
-        name = f"{eightdof_kernels.__name__}_{tire_name}"
+        name = f"{_KERNELS_MODULE}_{tire_name}"
         module = sys.modules.get(name)
         if module is None:
-            spec = importlib.util.spec_from_file_location(name, eightdof_kernels.__file__)
+            spec = importlib.util.spec_from_file_location(name, _KERNELS_FILE)
             assert spec is not None and spec.loader is not None
             module = importlib.util.module_from_spec(spec)
             module.TIRE_NAME = tire_name  # type: ignore[attr-defined]

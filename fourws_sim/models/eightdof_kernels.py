@@ -42,6 +42,7 @@ from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA
                                         _AUX_MZ, _AUX_RATE, EULER_RATE_BOUND,
                                         HELD_SPIN_FLOOR_RADPS, INPUT, MAX_SUBSTEPS, N_AUX,
                                         N_INPUT, N_STATE, PARAM, RK4_RATE_BOUND, STATE)
+from fourws_sim.models import eightdof
 from fourws_sim.tires import get_tire
 
 #: Tire model of this variant (set by ``kernels_for`` before the module body runs).
@@ -62,8 +63,6 @@ def _source_digest() -> str:
     and does not key its cache on compile options, so without this an edited tire or model, or
     a tire compiled earlier with other options (its cache lives beside the tire module), would
     silently run from a stale cache."""
-    from fourws_sim.models import eightdof
-
     digest = hashlib.sha1()
     digest.update(Path(__file__).read_bytes())
     digest.update(repr(sorted(JIT_OPTIONS.items())).encode())
