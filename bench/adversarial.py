@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
 """Adversarial pass over the fourws node graph: faults, rogue publishers, load, bad disks.
 
 Runs a fixed list of attempts against one fourws installation (``--fourws PATH``, the
@@ -58,7 +60,6 @@ import subprocess
 import sys
 import tempfile
 import textwrap
-import threading
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -558,8 +559,8 @@ def inspect_bag(bag: Bag, twin: dict[str, Any] | None, duration_s: float | None,
     bad_law = sum(1 for c in cmds if c.law != LAW)
     if bad_law:
         v.foreign.append(f"{bad_law} rear-steer commands of law != {LAW}")
-    nonfinite = sum(1 for s in states if not (math.isfinite(s.sim_time_s)
-                                             and math.isfinite(s.yaw_rate_radps)))
+    nonfinite = sum(1 for s in states
+                    if not (math.isfinite(s.sim_time_s) and math.isfinite(s.yaw_rate_radps)))
     if nonfinite:
         v.foreign.append(f"{nonfinite} states with non-finite time or yaw rate")
     if duration_s is not None:
@@ -852,9 +853,9 @@ class Attempts:
             print(f"  {name:58s} HARNESS ERROR {type(exc).__name__}: {exc}", flush=True)
 
     def _single(self, name: str, group: str, expect: Expect,
-               action: Callable[[Run], str] | None = None, env: dict[str, str] | None = None,
-               out: Path | None = None, how: str = "", before: Callable[[], str] | None = None,
-               timeout_s: float = HANG_S) -> None:
+                action: Callable[[Run], str] | None = None, env: dict[str, str] | None = None,
+                out: Path | None = None, how: str = "", before: Callable[[], str] | None = None,
+                timeout_s: float = HANG_S) -> None:
         if not self.wanted(name):
             return
         adir = self.work.attempt_dir(name)
@@ -904,8 +905,8 @@ class Attempts:
 
     def rogue(self, kinds: str, scenario: str, extra: Callable[[Run], str] | None = None,
               culprit: tuple[str, ...] = ("rogue", "second publisher", "foreign")) -> None:
-        name = f"rogue {kinds} ({SCENARIOS[scenario][1]})" + (" +controller stopped"
-                                                               if extra else "")
+        name = (f"rogue {kinds} ({SCENARIOS[scenario][1]})"
+                + (" +controller stopped" if extra else ""))
         if not self.wanted(name):
             return
         inst = self.work.inst
@@ -956,8 +957,9 @@ class Attempts:
                         action=action, env=env, before=before if domain is not None else None,
                         how=(f"ROS_DOMAIN_ID=D {self.how(scenario)} with "
                              f"`python rogue.py {kinds} 600` (the harness's ROGUE_CODE) "
-                             f"publishing on domain D" + (" ; SIGSTOP of the controller 2 s "
-                                                         "after graph up" if extra else "")))
+                             f"publishing on domain D"
+                             + (" ; SIGSTOP of the controller 2 s after graph up"
+                                if extra else "")))
         finally:
             proc = holder.get("proc")
             if proc is not None:
@@ -1183,7 +1185,7 @@ def failures(label: str, results: list[dict[str, Any]]) -> str:
                                        subsequent_indent="      "))
         if r["counts"]:
             lines.append("    bag: " + ", ".join(f"{t.rsplit('/', 1)[-1]} {n}"
-                                                for t, n in r["counts"].items()))
+                                                 for t, n in r["counts"].items()))
         lines.append(f"    reproduce: {r['reproduce']}")
         lines.append(f"    folder: {r['run_dir']}")
     return "\n".join(lines) if lines else f"[{label}] none"
