@@ -67,6 +67,7 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             "expected_state_subscribers": (2 + int(records)) if lockstep else 0,
             "recorder_window": RECORDER_WINDOW if lockstep and records else 0,
             "expected_subscribers_json": subscribers,
+            "controller_node": controller,
         },
         NODE_NAMES[Role.MANEUVER]: {
             "maneuver_json": dumps_config(config.maneuver.to_dict()),

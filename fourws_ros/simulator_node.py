@@ -165,6 +165,9 @@ class SimulatorNode(Node):
             floating_point_range=_frange(1e-3, 60.0)))
         declare("autostart", True, ParameterDescriptor(
             description="start running at once (false: paused until /fourws/pause false)"))
+        declare("controller_node", topics.NODE_NAMES[topics.Role.CONTROLLER], ParameterDescriptor(
+            description="ROS node name of the controller (named when it stops answering)",
+            read_only=True))
         declare("exit_when_done", True, ParameterDescriptor(
             description="exit once the run has ended and everything published is delivered "
                         "(false: stay up, paused)"))
@@ -415,8 +418,14 @@ class SimulatorNode(Node):
                 missing = self.answers.waiting_for
                 self._end(f"no {missing} for the state at t = {tick.t:.2f} s within "
                           f"{self._cfg['command_timeout_s']:g} s (wall time); "
-                          + ("the maneuver node" if "driver" in missing else
-                             "the controller node") + " stopped answering", failed=True)
+                          + self._silent_node(missing) + " stopped answering", failed=True)
+
+    def _silent_node(self, missing: str) -> str:
+        """The node whose answer is missing: the maneuver's driver input comes first (the
+        controller waits for it), so a missing driver input names the maneuver node."""
+        if "driver" in missing:
+            return f"the maneuver node ({topics.NODE_NAMES[topics.Role.MANEUVER]})"
+        return f"the controller node ({self._param('controller_node')})"
 
     def _report_long_wait(self) -> None:
         """A tick (or a held tick) waiting over a second: publish a status saying for what,
@@ -631,7 +640,8 @@ class SimulatorNode(Node):
                     quiet = t - max(book.driver_time_s, 0.0)
                     if quiet > self._cfg["driver_timeout_s"]:
                         self._end(f"no driver input for {quiet:.2f} s of simulation time at "
-                                  f"t = {t:.2f} s: the maneuver node stopped answering",
+                                  f"t = {t:.2f} s: {self._silent_node('driver')} stopped "
+                                  "answering",
                                   failed=True)
                         return
                 if not engine.advance(driver, rear, n_steps=1):

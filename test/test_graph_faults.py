@@ -207,7 +207,7 @@ def test_realtime_run_whose_maneuver_stops_ends_naming_it(tmp_path):
     run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path, run_name="rt",
                               on_running=_fault("fourws_maneuver", signal.SIGSTOP))
     assert run.outcome == Outcome.FAILED
-    assert "maneuver node stopped answering" in run.reason
+    assert "maneuver node (fourws_maneuver) stopped answering" in run.reason
     assert run.sim_time_s < 10.0  # ended about 1 s after the stop, not at the 30 s end
     assert all(code is not None for code in run.exit_codes.values())
 

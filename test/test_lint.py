@@ -17,7 +17,8 @@ from ament_flake8.main import main_with_errors
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Python sources checked by the linter.
-PYTHON = [*sorted(ROOT.glob("fourws_*")), ROOT / "test", ROOT / "launch", ROOT / "setup.py"]
+PYTHON = [*sorted(ROOT.glob("fourws_*")), ROOT / "test", ROOT / "launch", ROOT / "bench",
+          ROOT / "setup.py"]
 #: Files with an SPDX header: code, configuration and build files. Not the message definitions
 #: (their leading comment is the message's documentation, shown by ``ros2 interface show``
 #: and stored in every bag), the docs, the generated or plain lists (requirements*) and the

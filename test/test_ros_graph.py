@@ -261,7 +261,7 @@ def test_controller_that_stops_answering_fails_the_run(tmp_path):
     sc = _scenario(30.0)
     run = run_graph(sc, "sol1", tmp_path, run_name="frozen", on_running=freeze_controller,
                     node_overrides={"fourws_simulator": {"command_timeout_s": 2.0}})
-    assert not run.ok and "the controller node stopped answering" in run.reason
+    assert not run.ok and "the controller node (fourws_controller) stopped answering" in run.reason
     assert run.stale_commands == 0
     bag = load_bag(run.bag_path, allow_incomplete=True)
     state = bag.topics[topics.STATE]

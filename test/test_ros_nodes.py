@@ -357,7 +357,7 @@ def test_simulator_refuses_bad_commands_and_never_substitutes_one(lockstep_sim):
     peer.driver_pub.publish(conversions.driver_msg(DriverCommand(0.16, 0.01), s1.sim_time_s))
     assert _spin_until(executor, lambda: bool(sim.ended), 10.0)
     assert "no rear-steer command for the state at t = 0.01 s" in sim.stop_reason
-    assert "controller node stopped answering" in sim.stop_reason
+    assert "controller node (fourws_controller) stopped answering" in sim.stop_reason
     assert len(peer.states) == 2
     for s in peer.states:
         assert math.isfinite(s.yaw_rate_radps) and math.isfinite(s.speed_mps)
