@@ -264,6 +264,15 @@ class Maneuver:
         """Look for the type's end condition in ``outputs`` and :meth:`end` the run if it is
         met (none by default)."""
 
+    def end_at_limits(self, outputs: Mapping[str, Any], max_lateral_accel_mps2: float,
+                      max_sideslip_rad: float) -> None:
+        """The end of a slowly increasing steer: the lateral-acceleration limit reached (the
+        designed end condition), or the sideslip past its limit (an abort: the car spins)."""
+        if abs(float(outputs["lateral_accel_mps2"])) >= max_lateral_accel_mps2:
+            self.end("lateral acceleration limit reached", end_condition=True)
+        elif abs(float(outputs.get("sideslip_rad", 0.0))) > max_sideslip_rad:
+            self.end("sideslip limit reached (the car spins)")
+
     def done(self, t: float, outputs: Mapping[str, Any] | None = None) -> bool:
         """True once the run may end: duration reached, or an end condition of the type."""
         if self._aborted:
@@ -299,6 +308,28 @@ def finite_or_none(params: Any, bounds: Mapping[str, tuple[float, float]],
         object.__setattr__(params, name, float(value))
 
 
+#: Shapes of a single pulse input (ISO 7401 steering pulse, ISO 17288-2 torque pulse).
+PULSE_SHAPES = ("triangle", "half_sine")
+
+
+def check_pulse_shape(shape: str, source: str | None, prefix: str) -> None:
+    """A pulse's ``shape`` must be one of :data:`PULSE_SHAPES`."""
+    if shape not in PULSE_SHAPES:
+        raise ParameterError(f"{prefix}shape",
+                             f"must be triangle or half_sine, got {shape!r}", source)
+
+
+def pulse_shape(t: float, start_s: float, width_s: float, shape: str) -> float:
+    """A single pulse of unit peak at ``t`` (s): 0 outside ``(start_s, start_s + width_s)``,
+    a ``triangle`` (area w / 2) or a ``half_sine`` (area 2 w / pi) within."""
+    s = (t - start_s) / width_s
+    if s <= 0.0 or s >= 1.0:
+        return 0.0
+    if shape == "triangle":
+        return 1.0 - abs(2.0 * s - 1.0)
+    return math.sin(math.pi * s)
+
+
 def peak_input(params: Any) -> tuple[str, float] | None:
     """The field that sets the largest open-loop input angle of a type's parameters and that
     angle (rad, in the unit of ``steer_input``): the parameters' own ``peak_input()`` if they
@@ -315,5 +346,6 @@ def peak_input(params: Any) -> tuple[str, float] | None:
 __all__ = ["ANGLE_BOUNDS_RAD", "FREQUENCY_BOUNDS_HZ", "MAX_DURATION_S",
            "MAX_HAND_WHEEL_ANGLE_RAD", "MAX_PATH_POINTS", "MAX_RANDOM_SAMPLES",
            "MAX_ROAD_WHEEL_ANGLE_RAD", "MAX_STEER_FREQUENCY_HZ", "Maneuver", "ManeuverSpec",
-           "RANDOM_PEAK_PER_RMS", "RATE_BOUNDS_RADPS", "STEERING_CONTROLS", "STEER_INPUTS",
-           "TIME_BOUNDS_S", "TIME_EPS_S", "finite_or_none", "peak_input", "smooth_ramp"]
+           "PULSE_SHAPES", "RANDOM_PEAK_PER_RMS", "RATE_BOUNDS_RADPS", "STEERING_CONTROLS",
+           "STEER_INPUTS", "TIME_BOUNDS_S", "TIME_EPS_S", "check_pulse_shape", "finite_or_none",
+           "peak_input", "pulse_shape", "smooth_ramp"]

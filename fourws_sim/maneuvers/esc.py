@@ -227,11 +227,8 @@ class SlowlyIncreasingSteer(SteeringWheelManeuver):
 
     def check_end(self, t: float, outputs: Mapping[str, Any]) -> None:
         """End at the lateral-acceleration limit or abort when the car spins."""
-        p = self.params
-        if abs(float(outputs["lateral_accel_mps2"])) >= p.max_lateral_accel_mps2:
-            self.end("lateral acceleration limit reached", end_condition=True)
-        elif abs(float(outputs.get("sideslip_rad", 0.0))) > p.max_sideslip_rad:
-            self.end("sideslip limit reached (the car spins)")
+        self.end_at_limits(outputs, self.params.max_lateral_accel_mps2,
+                           self.params.max_sideslip_rad)
 
 
 @dataclass(frozen=True)

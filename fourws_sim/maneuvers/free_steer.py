@@ -35,14 +35,14 @@ after; the free oscillation of the steering and the yaw rate that follows is the
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers.base import (MAX_DURATION_S, TIME_BOUNDS_S, TIME_EPS_S, Maneuver,
-                                       ManeuverSpec, smooth_ramp)
+                                       ManeuverSpec, check_pulse_shape, pulse_shape,
+                                       smooth_ramp)
 from fourws_sim.params import Vehicle, _spec
 
 
@@ -236,18 +236,11 @@ class SteeringPulseParams:
 
     def _check(self, source: str | None, prefix: str,
                unchecked: frozenset[str] = frozenset()) -> None:
-        if self.shape not in ("triangle", "half_sine"):
-            raise ParameterError(f"{prefix}shape",
-                                 f"must be triangle or half_sine, got {self.shape!r}", source)
+        check_pulse_shape(self.shape, source, prefix)
 
     def torque(self, t: float) -> float:
         """Steering-wheel torque (N m) at ``t`` (s)."""
-        s = (t - self.start_s) / self.width_s
-        if s <= 0.0 or s >= 1.0:
-            return 0.0
-        if self.shape == "triangle":
-            return self.torque_nm * (1.0 - abs(2.0 * s - 1.0))
-        return self.torque_nm * math.sin(math.pi * s)
+        return self.torque_nm * pulse_shape(t, self.start_s, self.width_s, self.shape)
 
     def phase(self, t: float) -> str:
         """``settle``, ``pulse``, ``free``."""

@@ -23,7 +23,8 @@ from fourws_sim.maneuvers.base import (ANGLE_BOUNDS_RAD, FREQUENCY_BOUNDS_HZ,
                                        MAX_DURATION_S, MAX_HAND_WHEEL_ANGLE_RAD,
                                        MAX_RANDOM_SAMPLES, RANDOM_PEAK_PER_RMS,
                                        RATE_BOUNDS_RADPS, TIME_BOUNDS_S, TIME_EPS_S, Maneuver,
-                                       ManeuverSpec, finite_or_none, smooth_ramp)
+                                       ManeuverSpec, check_pulse_shape, finite_or_none,
+                                       pulse_shape, smooth_ramp)
 from fourws_sim.params import Vehicle, _spec
 
 
@@ -190,11 +191,8 @@ class SlowRampSteer(Maneuver):
 
     def check_end(self, t: float, outputs: Mapping[str, Any]) -> None:
         """End at ``|a_y| >= max_lateral_accel_mps2`` or ``|sideslip| > max_sideslip_rad``."""
-        p = self.params
-        if abs(float(outputs["lateral_accel_mps2"])) >= p.max_lateral_accel_mps2:
-            self.end("lateral acceleration limit reached", end_condition=True)
-        elif abs(float(outputs.get("sideslip_rad", 0.0))) > p.max_sideslip_rad:
-            self.end("sideslip limit reached (the car spins)")
+        self.end_at_limits(outputs, self.params.max_lateral_accel_mps2,
+                           self.params.max_sideslip_rad)
 
 
 @dataclass(frozen=True)
@@ -395,18 +393,11 @@ class PulseParams:
 
     def _check(self, source: str | None, prefix: str,
                unchecked: frozenset[str] = frozenset()) -> None:
-        if self.shape not in ("triangle", "half_sine"):
-            raise ParameterError(f"{prefix}shape",
-                                 f"must be triangle or half_sine, got {self.shape!r}", source)
+        check_pulse_shape(self.shape, source, prefix)
 
     def steer(self, t: float) -> float:
         """Input angle (rad) at time ``t`` (s)."""
-        s = (t - self.start_s) / self.width_s
-        if s <= 0.0 or s >= 1.0:
-            return 0.0
-        if self.shape == "triangle":
-            return self.amplitude_rad * (1.0 - abs(2.0 * s - 1.0))
-        return self.amplitude_rad * math.sin(math.pi * s)
+        return self.amplitude_rad * pulse_shape(t, self.start_s, self.width_s, self.shape)
 
     @property
     def area_rad_s(self) -> float:
