@@ -239,7 +239,8 @@ class ControllerNode(Node):
         self._config_pub.publish(msg)
 
     def _on_sim_status(self, msg: Any) -> None:
-        if msg.final and bool(self.get_parameter("exit_when_done").value):
+        if msg.final and bool(self.get_parameter("exit_when_done").value) \
+                and self.gate.admits_final(float(msg.sim_time_s)):
             self.get_logger().info(f"simulation ended ({msg.end_reason}); stopping")
             self.finished = True
 

@@ -185,7 +185,7 @@ class ManeuverNode(Node):
     def _on_sim_status(self, msg: Any) -> None:
         """The simulation ended before the maneuver did (it diverged, or stopped for a node
         that stopped answering): report the final counts with ``end`` ``stopped``."""
-        if msg.final and not self.done:
+        if msg.final and not self.done and self.gate.admits_final(float(msg.sim_time_s)):
             t = float(msg.sim_time_s)
             self._finish(conversions.time_to_ns(t), t, "stopped",
                          f"stopped: the simulation ended first ({msg.end_reason})")

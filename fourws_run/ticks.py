@@ -512,6 +512,20 @@ class StateGate:
         self.last_step = step
         return True
 
+    def admits_final(self, t_s: float) -> bool:
+        """Whether a final simulator status at simulation time ``t_s`` can be this run's:
+        not before the last answered state, and (lockstep) at most one state period after it
+        -- the simulator cannot run further ahead of a node that answers every state -- or
+        (realtime) at most the longest gap the gate accepts. A final status from anywhere
+        else (a rogue at t = 1e6 s, another run) is refused and counted, so it cannot stop
+        the node."""
+        t_last = (self.last_step or 0) * self.dt_s
+        ahead = (self.every + 1 if self.lockstep else self.max_gap_steps) * self.dt_s
+        if math.isfinite(t_s) and t_last <= t_s <= t_last + ahead:
+            return True
+        return self.rejections.add(interface.SIM_STATUS, "final status not of this run",
+                                   f"t = {t_s!r} s after the state at {t_last!r} s")
+
 
 # ============================================================================ realtime pacing
 

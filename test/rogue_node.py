@@ -6,7 +6,8 @@ Run as ``python rogue_node.py KIND SECONDS`` on the run's ROS domain; ``KIND``:
 
 * ``garbage`` -- states with a simulation time of 1e6 s, NaN and far-future states, commands
   with future stamps and impossible angles, a 100 rad driver input, a ``done`` maneuver
-  status for no state of the run, a flood of each, for ``SECONDS``;
+  status for no state of the run, a final simulator status at t = 1e6 s, a flood of each, for
+  ``SECONDS``;
 * ``mimic`` -- answers every state of the run with a plausible driver input and rear-steer
   command (a second publisher where one is expected).
 """
@@ -75,7 +76,13 @@ def main(kind: str, seconds: float) -> int:
             status.done = True
             status.end = "completed"
             pubs[topics.MANEUVER_STATUS].publish(status)
-            sent += 4
+            final = msg(topics.SIM_STATUS)()
+            conversions.set_stamp(final.header.stamp, 1e6 + k)
+            final.sim_time_s = 1e6 + k
+            final.final = True
+            final.end_reason = "maneuver completed"
+            pubs[topics.SIM_STATUS].publish(final)
+            sent += 5
             time.sleep(0.002)
     print(f"rogue {kind}: sent {sent} messages", flush=True)
     node.destroy_node()

@@ -203,3 +203,21 @@ def test_whole_multiple_is_one_check() -> None:
         whole_multiple(0.01, 0.0, "control_period_s")
     with pytest.raises(ParameterError, match="state_period_s.*whole multiple"):
         whole_multiple(0.0005, 0.001, "state_period_s")
+
+
+def test_state_gate_admits_only_a_final_status_of_its_own_run():
+    """A final simulator status is the run's only at or after the last answered state and
+    (lockstep) at most one state period (+ one step) later: the simulator cannot run further
+    ahead of a node answering every state. Numbers: dt 1 ms, state period 10 ms."""
+    gate = StateGate(1e-3, 1e-2, lockstep=True)
+    assert gate.admits_final(0.0)  # the simulator ended before its first state
+    assert not gate.admits_final(1e6) and not gate.admits_final(math.nan)
+    for k in range(3):
+        assert gate.admit(10 * k, 10 * k * 1e-3, interface.time_to_ns(10 * k * 1e-3))
+    t_last = 20 * 1e-3
+    assert gate.admits_final(t_last) and gate.admits_final(t_last + 0.011)
+    assert not gate.admits_final(t_last + 0.0111)
+    assert not gate.admits_final(t_last - 1e-3)  # before what was answered
+    assert gate.rejections.counts[f"{interface.SIM_STATUS}: final status not of this run"] == 4
+    realtime = StateGate(1e-3, 1e-2, lockstep=False, max_gap_s=1.0)
+    assert realtime.admits_final(1.0) and not realtime.admits_final(1.002)
