@@ -429,6 +429,19 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: _LauncherNode, state: _R
             if state.sim_final is None:
                 return describe_exit(dead)
             break
+        sim_proc = group.child(NODE_NAMES[Role.SIMULATOR])
+        if sim_proc.proc is not None and not sim_proc.alive():
+            grace = time.monotonic() + 2.0  # its last messages may still be on their way
+            while state.sim_final is None and time.monotonic() < grace:
+                ros.spin(0.05)
+            if state.sim_final is None:
+                # the simulator ended by itself (its final status was sent) but the status
+                # never reached this process: it was stopped or starved while the
+                # simulator waited for its acknowledgement. The bag's own check follows.
+                return (f"the simulator exited (code {sim_proc.exit_code()}) but its final "
+                        "status never reached the launcher (fourws run was stopped or "
+                        "starved meanwhile); the outcome is the bag's alone")
+            break
         now = time.monotonic()
         if now - state.last_advance > STALL_TIMEOUT_S:
             waiting = state.sim.waiting_for if state.sim is not None else ""

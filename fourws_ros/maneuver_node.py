@@ -106,9 +106,9 @@ class ManeuverNode(Node):
         self._driver_encoder = codecs.DriverInputEncoder(topics.FRAME_BODY)
         self._recorder = reporting.RecorderWatch(self)
         self.matched = reporting.match_wait(self, self.counts)
-        # a state that came before the publishers matched the run's subscribers (the
-        # recorder among them): answered once they have
-        self._held: bytes | None = None
+        # states of the run (admitted by the gate) that came before the publishers matched
+        # the run's subscribers (the recorder among them): answered, in order, once they have
+        self._held: list[dict[str, Any]] = []
         self._held_timer = self.create_timer(0.02, self._answer_held)
         self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
                                  self._on_sim_status, topics.STATUS_QOS)
@@ -143,15 +143,12 @@ class ManeuverNode(Node):
         if not self.matched.ready():
             return
         self._held_timer.cancel()
-        if self._held is not None:
-            raw, self._held = self._held, None
-            self._on_state(raw)
+        held, self._held = self._held, []
+        for outputs in held:
+            self._answer(outputs)
 
     def _on_state(self, raw: bytes) -> None:
         if self.done:
-            return
-        if not self.matched.ready():
-            self._held = raw  # the latest: in lockstep the first (the simulator waits)
             return
         try:
             outputs = codecs.parse_state(raw)
@@ -164,6 +161,17 @@ class ManeuverNode(Node):
             self.get_logger().warning(f"refused a state: {self.gate.rejections.last}",
                                       throttle_duration_sec=1.0)
             return
+        if not self.matched.ready() or self._held:
+            self._held.append(outputs)  # lockstep: the first state (the simulator waits)
+            return
+        self._answer(outputs)
+
+    def _answer(self, outputs: dict[str, Any]) -> None:
+        """Answer an admitted state: the driver input, or the maneuver's end."""
+        if self.done:
+            return
+        t = outputs["sim_time_s"]
+        stamp = outputs["stamp_ns"]
         if self.maneuver.done(t, outputs):
             reason = self.maneuver.abort_reason
             self._finish(stamp, t, self.maneuver.end_kind,

@@ -656,3 +656,53 @@ def test_nodes_refuse_a_malformed_expected_subscribers_parameter(rclpy_context):
 
     with pytest.raises(ParameterError, match="expected_subscribers_json"):
         _make_node(ControllerNode, rclpy_context, expected_subscribers_json='{"a": "b"}')
+
+
+def test_maneuver_holds_the_runs_first_state_among_rogue_ones_until_matched(rclpy_context):
+    """The maneuver node gets the run's first state (step 0) and then a flood of foreign
+    states before its driver-input publisher has matched the run's subscribers: once the
+    second subscriber matches it answers exactly the run's state -- one driver input stamped
+    t = 0 -- and none of the foreign ones (they are refused by the gate, not held)."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from fourws_ros.maneuver_node import ManeuverNode
+
+    man = _make_node(ManeuverNode, rclpy_context,
+                     expected_subscribers_json=json.dumps({topics.DRIVER_INPUT: 2}))
+    src = rclpy.create_node("state_source", context=rclpy_context)
+    pub = src.create_publisher(topics.message_class(topics.STATE), topics.STATE,
+                               topics.STREAM_QOS)
+    got = []
+    src.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
+                            got.append, topics.STREAM_QOS)
+    late = rclpy.create_node("late_subscriber", context=rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    for n in (man, src):
+        executor.add_node(n)
+    try:
+        assert _spin_until(executor, lambda: pub.get_subscription_count() >= 1
+                           and man.driver_pub.get_subscription_count() >= 1, 20.0)
+        msg = topics.message_class(topics.STATE)()
+        msg.speed_mps = 23.6
+        msg.step = 0
+        pub.publish(msg)  # the run's first state: t = 0, step 0
+        for k in range(1, 40):  # foreign: off the run's clock, or not continuing it
+            conversions.set_stamp(msg.header.stamp, 1e6 + k)
+            msg.sim_time_s = 1e6 + k
+            msg.step = 10 ** 9 + k
+            pub.publish(msg)
+        _spin_until(executor, lambda: bool(got), 1.0)
+        assert got == [] and len(man._held) == 1
+        late.create_subscription(topics.message_class(topics.DRIVER_INPUT),
+                                 topics.DRIVER_INPUT, lambda m: None, topics.STREAM_QOS)
+        executor.add_node(late)
+        assert _spin_until(executor, lambda: bool(got), 20.0)
+        _spin_until(executor, lambda: len(got) > 1, 0.5)
+        assert len(got) == 1
+        assert (got[0].header.stamp.sec, got[0].header.stamp.nanosec) == (0, 0)
+        assert man.gate.rejections.total == 39
+    finally:
+        executor.shutdown()
+        for n in (man, src, late):
+            n.destroy_node()
