@@ -83,8 +83,9 @@ def _stop(proc: subprocess.Popen) -> str:
 def test_rogue_garbage_is_refused_counted_and_the_run_is_exact(tmp_path, user_domain):
     """A foreign node floods the run's domain with states of t = 1e6 s, NaN states, commands
     for future states, NaN and 0.08 rad commands, a 100 rad driver input, 'done' maneuver
-    statuses and final simulator statuses. None of it reaches the run: the bag holds the twin's states exactly, none of
-    the rogue's messages, and the record counts what was refused and by whom."""
+    statuses and final simulator statuses. None of it reaches the run: the bag holds the
+    twin's states exactly, none of the rogue's messages, and the record counts what was
+    refused and by whom."""
     # 40 s of simulation (a few s of wall time): long enough for the rogue's publishers to
     # be discovered by every node, whatever the load, so each of them meets the garbage
     sc = _scenario(40.0)
