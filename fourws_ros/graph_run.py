@@ -568,8 +568,20 @@ def _conclude(record: RunRecord, config: RunConfig, state: _RunState, interrupt:
     assert state.sim_final is not None
     end = str(state.sim_final.end_reason)
     ambiguous = {k: n for k, n in record.rejections.items() if "second answer" in k}
+    # states refused for not continuing the run although they were on its clock: a second
+    # publisher sends states of this run, and the nodes cannot tell which one they answered
+    # (the simulator's own may have been the refused one)
+    maneuver = NODE_NAMES[Role.MANEUVER]
+    doubled = {k: n for k, n in record.rejections.items() if k.startswith(maneuver) and (
+        "not after the previous state" in k or (config.lockstep and "skips states" in k))}
     stop = str(state.sim_final.stop_reason)
-    if stop:
+    if doubled:  # whatever followed, the run's inputs are not certain
+        record.outcome = Outcome.FAILED
+        record.reason = ("a second publisher sent states on this run's clock ("
+                         + "; ".join(f"{n}x {k}" for k, n in doubled.items())
+                         + "): the answers applied may be to its states"
+                         + (f"; then: {stop}" if stop else ""))
+    elif stop:
         diverged = "diverged" in stop and not problems
         record.outcome = Outcome.DIVERGED if diverged else Outcome.FAILED
         record.reason = stop + ("" if not problems else
@@ -595,6 +607,13 @@ def _conclude(record: RunRecord, config: RunConfig, state: _RunState, interrupt:
     elif state.maneuver_end is None:
         record.outcome = Outcome.FAILED
         record.reason = f"the simulation ended without the maneuver's end ({end})"
+    elif state.maneuver_end.end == "stopped":
+        # the maneuver node was not done: the simulator ended on an end it did not send
+        # (a foreign 'done' status on the run's domain) or for a reason of its own
+        record.outcome = Outcome.FAILED
+        record.reason = (f"the simulation ended ({end}) at t = {record.sim_time_s:.2f} s "
+                         f"before the maneuver node was done ({state.maneuver_end.event}); "
+                         "a foreign maneuver status on the run's domain?")
     else:
         record.outcome = Outcome.COMPLETED
         record.reason = end

@@ -9,7 +9,10 @@ Run as ``python rogue_node.py KIND SECONDS`` on the run's ROS domain; ``KIND``:
   status for no state of the run, a final simulator status at t = 1e6 s, a flood of each, for
   ``SECONDS``;
 * ``mimic`` -- answers every state of the run with a plausible driver input and rear-steer
-  command (a second publisher where one is expected).
+  command (a second publisher where one is expected);
+* ``done`` -- from the run's 200th state on, a ``done`` maneuver status stamped with each
+  state (as the maneuver node ends a run);
+* ``clock`` -- copies of the run's states, one step ahead of each (on the run's clock).
 """
 
 from __future__ import annotations
@@ -49,6 +52,35 @@ def main(kind: str, seconds: float) -> int:
             pubs[topics.REAR_STEER_CMD].publish(cmd)
             sent += 2
         node.create_subscription(msg(topics.STATE), topics.STATE, answer, topics.STREAM_QOS)
+    elif kind == "done":
+        def finish(state) -> None:
+            nonlocal sent
+            if state.step >= 200 * 10:
+                status = msg(topics.MANEUVER_STATUS)()
+                status.header.stamp = state.header.stamp
+                status.maneuver = "step_steer_85kmh"
+                status.phase = "done"
+                status.done = True
+                status.end = "completed"
+                status.event = "completed"
+                pubs[topics.MANEUVER_STATUS].publish(status)
+                sent += 1
+        node.create_subscription(msg(topics.STATE), topics.STATE, finish, topics.STREAM_QOS)
+    elif kind == "clock":
+        own: set[int] = set()
+
+        def ahead(state) -> None:
+            nonlocal sent
+            if state.step in own:
+                return  # its own copy
+            state.step += 10
+            own.add(state.step)
+            state.sim_time_s = state.step * 1e-3
+            conversions.set_stamp(state.header.stamp, state.sim_time_s)
+            pubs[topics.STATE].publish(state)
+            sent += 1
+        node.create_subscription(msg(topics.STATE), topics.STATE, ahead, topics.STREAM_QOS)
+    if kind in ("mimic", "done", "clock"):
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         while time.monotonic() < end:

@@ -273,3 +273,31 @@ def test_full_and_read_only_disks_end_in_one_line_errors(tmp_path, small_disk):
     assert res.returncode == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "read-only file system" in lines[0].lower(), res.stderr
+
+
+@pytest.mark.parametrize("kind", ["done", "clock"])
+def test_foreign_messages_on_the_runs_clock_never_pass_as_ok(tmp_path, user_domain, kind):
+    """A foreign node that copies the run's stamps: 'done' maneuver statuses for every state
+    from t = 2 s (one that meets the tick the simulator waits on ends the run early), or
+    copies of each state one step ahead (the maneuver and controller may answer those).
+    Content cannot always tell them from the run's own. Either every one of them was refused
+    by content and the run is complete and exact (the twin's states), or the run fails
+    saying what happened; it never passes short or with foreign answers."""
+    sc = _scenario(40.0)
+    rogue = _start_rogue(kind, 120.0)
+    try:
+        run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
+                                  run_name=kind)
+    finally:
+        os.killpg(rogue.pid, signal.SIGTERM)
+        rogue_out = _stop(rogue)
+    assert "sent 0 messages" not in rogue_out, rogue_out  # the rogue did meet the run
+    if run.ok:
+        assert run.complete and run.sim_time_s == pytest.approx(40.0)
+        _assert_equals_twin(run.bag_path, sc, "sol1")
+        assert sum(run.rejections.values()) > 0  # its messages were met and refused
+    else:
+        assert run.outcome == Outcome.FAILED, run.reason
+        assert ("before the maneuver node was done" in run.reason if kind == "done" else
+                "a second publisher sent states on this run's clock" in run.reason), \
+            run.reason
