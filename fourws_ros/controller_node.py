@@ -259,6 +259,10 @@ class ControllerNode(Node):
         except codecs.CodecError as exc:
             self.get_logger().error(f"ignored state: {exc}", throttle_duration_sec=1.0)
             return
+        bad = codecs.outputs_finite(state)
+        if bad:  # the simulator never publishes one: refused before it takes a step's place
+            self.gate.rejections.add(topics.STATE, "non-finite state", bad)
+            return
         if not self.gate.admit(state["step"], state["sim_time_s"], state["stamp_ns"]):
             self.get_logger().warning(f"refused a state: {self.gate.rejections.last}",
                                       throttle_duration_sec=1.0)

@@ -155,6 +155,10 @@ class ManeuverNode(Node):
         except codecs.CodecError as exc:
             self.gate.rejections.add(topics.STATE, "not a VehicleState", str(exc))
             return
+        bad = codecs.outputs_finite(outputs)
+        if bad:  # the simulator never publishes one: refused before it takes a step's place
+            self.gate.rejections.add(topics.STATE, "non-finite state", bad)
+            return
         t = outputs["sim_time_s"]
         stamp = outputs["stamp_ns"]
         if not self.gate.admit(outputs["step"], t, stamp):

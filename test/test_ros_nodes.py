@@ -706,3 +706,42 @@ def test_maneuver_holds_the_runs_first_state_among_rogue_ones_until_matched(rclp
         executor.shutdown()
         for n in (man, src, late):
             n.destroy_node()
+
+
+def test_maneuver_refuses_a_non_finite_state_on_the_runs_clock(rclpy_context):
+    """A NaN state with the run's step 0 and stamp comes first: it is refused for its content
+    (not admitted), so the run's own state 0 that follows is answered -- one driver input,
+    stamped t = 0 -- and nothing is counted as a state that does not continue the run."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from fourws_ros.maneuver_node import ManeuverNode
+
+    man = _make_node(ManeuverNode, rclpy_context)
+    src = rclpy.create_node("state_source", context=rclpy_context)
+    pub = src.create_publisher(topics.message_class(topics.STATE), topics.STATE,
+                               topics.STREAM_QOS)
+    got = []
+    src.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
+                            got.append, topics.STREAM_QOS)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    for n in (man, src):
+        executor.add_node(n)
+    try:
+        assert _spin_until(executor, lambda: pub.get_subscription_count() >= 1
+                           and man.driver_pub.get_subscription_count() >= 1, 20.0)
+        msg = topics.message_class(topics.STATE)()
+        msg.speed_mps = 23.6
+        msg.yaw_rate_radps = math.nan
+        pub.publish(msg)  # step 0, t = 0, NaN yaw rate
+        msg.yaw_rate_radps = 0.0
+        pub.publish(msg)  # the run's state 0
+        assert _spin_until(executor, lambda: bool(got), 20.0)
+        _spin_until(executor, lambda: len(got) > 1, 0.5)
+        assert len(got) == 1 and got[0].header.stamp.sec == got[0].header.stamp.nanosec == 0
+        assert dict(man.gate.rejections.counts) == {
+            f"{topics.STATE}: non-finite state": 1}
+    finally:
+        executor.shutdown()
+        for n in (man, src):
+            n.destroy_node()
