@@ -84,8 +84,7 @@ def run(args: argparse.Namespace) -> int:
     from fourws_run.config import RunConfig  # rosbags, mcap: not for --help
     from fourws_sim.maneuvers import MAX_DURATION_S  # 0.04 s: not for --help
 
-    bounded("--lockstep-seconds", args.lockstep_seconds, 0.0, MAX_DURATION_S, " s",
-            low_open=True)
+    bounded("--lockstep-seconds", args.lockstep_seconds, 0.0, MAX_DURATION_S, " s")
     bounded("--realtime-seconds", args.realtime_seconds, 0.0, MAX_DURATION_S, " s")
     bounded("--state-rate-hz", args.state_rate_hz, 1.0, 1e4, " Hz")
     out = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="fourws-bench-"))
