@@ -67,10 +67,10 @@ def _recording(record) -> dict[str, object]:
 
 def _overrun_times(bag_path) -> list[float]:
     """Simulation times of every realtime overrun, as the bag holds them."""
-    from fourws_analysis.bag import TOPIC_SIM_STATUS, load_bag  # scipy, control: not for --help
+    from fourws_analysis.bag import load_bag  # scipy, control: not for --help
+    from fourws_run.interface import SIM_STATUS  # rosbags: not for --help
 
-    status = load_bag(bag_path, [TOPIC_SIM_STATUS], allow_incomplete=True).topics.get(
-        TOPIC_SIM_STATUS)
+    status = load_bag(bag_path, [SIM_STATUS], allow_incomplete=True).topics.get(SIM_STATUS)
     if status is None or "overrun_times_s" not in status.fields:
         return []
     return [float(t) for row in status.fields["overrun_times_s"] for t in row]

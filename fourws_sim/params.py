@@ -155,6 +155,20 @@ def bounded_fields(cls: type, prefix: str = "") -> list[str]:
                                                  *getattr(cls, "OPTIONAL_BOUNDS", {}))]
 
 
+def name_and_description(data: Mapping[str, Any], source: str | None,
+                         default_name: str | None = None) -> tuple[str, str]:
+    """The ``name`` (a non-empty string, ``default_name`` when absent) and ``description`` (a
+    string, empty when absent) of a configuration file's mapping; ``ParameterError`` else."""
+    name = data.get("name", default_name)
+    if not isinstance(name, str) or not name:
+        raise ParameterError("name", f"must be a non-empty string, got {describe(name)}", source)
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise ParameterError("description", f"must be a string, got {describe(description)}",
+                             source)
+    return name, description
+
+
 def unchecked_fields_from(data: Mapping[str, Any], valid: list[str] | set[str],
                           source: str | None) -> frozenset[str]:
     """The ``unchecked_fields`` list of a file (empty if absent), each name checked.
@@ -522,13 +536,7 @@ def vehicle_from_mapping(data: Any, source: str = "<mapping>") -> Vehicle:
             raise ParameterError(key, "missing required field", source)
         if data[key] is None:
             raise ParameterError(key, "is null; it is required", source)
-    name = data["name"]
-    if not isinstance(name, str) or not name:
-        raise ParameterError("name", f"must be a non-empty string, got {describe(name)}", source)
-    description = data.get("description", "")
-    if not isinstance(description, str):
-        raise ParameterError("description", f"must be a string, got {describe(description)}",
-                             source)
+    name, description = name_and_description(data, source)
     unchecked = unchecked_fields_from(data, _vehicle_bounded_fields(data), source)
     # an optional subsystem given as null is absent (as if the key were not there)
     subs = {key: _from_mapping(cls, data[key], source, f"{key}.", unchecked)

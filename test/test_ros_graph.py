@@ -9,6 +9,7 @@ reserves its own ROS domain and limits discovery to this machine.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import signal
 import subprocess
@@ -268,3 +269,22 @@ def test_controller_that_stops_answering_fails_the_run(tmp_path):
     cmds = bag.topics[topics.REAR_STEER_CMD]
     assert len(state) == len(cmds) + 1  # every tick that ran had its command
     assert run.exit_codes["fourws_controller"] is not None  # the stopped process was ended
+
+
+def test_bench_graph_reports_a_realtime_run(tmp_path):
+    """`fourws bench-graph` with only a realtime run (the soak command, shortened to 1 s):
+    one JSON object whose realtime run is ok and complete, every recorded topic stored as
+    published, states every 5 ms (200 Hz) with no gap, and the overrun times read from the
+    bag (a list). Timings are reported, not asserted."""
+    res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "bench-graph", "--json",
+                          "--lockstep-seconds", "0", "--realtime-seconds", "1",
+                          "--keep", str(tmp_path / "keep")],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    out = json.loads(res.stdout)
+    assert "lockstep_ok" not in out  # skipped
+    assert out["realtime_ok"] and out["realtime_recording"]["complete"]
+    for topic, n in out["realtime_recording"]["topics"].items():
+        assert n["published"] == n["stored"] and n["lost"] == 0, topic
+    assert out["realtime_state_rate_hz"] == pytest.approx(200.0, rel=1e-6)
+    assert isinstance(out["realtime_overrun_times_s"], list)

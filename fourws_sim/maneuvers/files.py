@@ -20,8 +20,9 @@ from fourws_sim.maneuvers.base import (MAX_DURATION_S, MAX_HAND_WHEEL_ANGLE_RAD,
 from fourws_sim.maneuvers.registry import DRIVER_KEYS, MANEUVER_CLASSES
 from fourws_sim.models import FREE_STEERING_MODELS
 from fourws_sim.params import (CONFIG_DIR, MAX_SPEED_MPS, UNCHECKED_KEY, Vehicle, _from_mapping,
-                               available_configs, bounded_fields, check_plausible, read_yaml,
-                               resolve_config_path, unchecked_fields_from)
+                               available_configs, bounded_fields, check_plausible,
+                               name_and_description, read_yaml, resolve_config_path,
+                               unchecked_fields_from)
 
 MANEUVER_DIR = CONFIG_DIR / "maneuvers"
 #: Fields every maneuver file may have besides its type's fields.
@@ -93,13 +94,7 @@ def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
                              f"{', '.join(sorted(MANEUVER_CLASSES))})", source)
     kind = data["type"]
     cls = maneuver_class(kind, source)
-    name = data.get("name", default_name)
-    if not isinstance(name, str) or not name:
-        raise ParameterError("name", f"must be a non-empty string, got {describe(name)}", source)
-    description = data.get("description", "")
-    if not isinstance(description, str):
-        raise ParameterError("description", f"must be a string, got {describe(description)}",
-                             source)
+    name, description = name_and_description(data, source, default_name)
     unchecked = unchecked_fields_from(data, _bounded_fields(cls.Params), source)
     common: dict[str, float] = {}
     for key in ("initial_speed_mps", "duration_s"):
