@@ -52,9 +52,6 @@ class ContractController(Node):
         from fourws.msg import SimulatorStatus
         self.create_subscription(SimulatorStatus, "/fourws/sim_status", self.on_status, STATUS)
         self.done = False
-        # the first answer waits until the command publisher has matched the simulator and
-        # the recorder (a volatile publisher never resends to a subscriber matched later)
-        self.create_timer(0.05, self.answer_all)
 
     def on_config(self, msg: String) -> None:
         self.config = json.loads(msg.data)
@@ -72,7 +69,7 @@ class ContractController(Node):
         self.answer_all()
 
     def answer_all(self) -> None:
-        if self.config is None or self.pub.get_subscription_count() < 2:
+        if self.config is None:
             return
         belief = self.config["belief_vehicle"]
         limit = belief["actuators"]["rear_angle_limit_rad"]
