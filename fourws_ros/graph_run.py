@@ -48,6 +48,7 @@ from fourws_run.accounting import RunAccount
 from fourws_run.bagfile import BagError, verify_bag
 from fourws_run.config import RunConfig
 from fourws_run.record import Outcome, RunRecord
+from fourws_run.ticks import NOT_AFTER_PREVIOUS, SECOND_ANSWER, SKIPS_STATES
 from fourws_sim.errors import FourwsError
 
 Role = topics.Role
@@ -567,13 +568,13 @@ def _conclude(record: RunRecord, config: RunConfig, state: _RunState, interrupt:
         return
     assert state.sim_final is not None
     end = str(state.sim_final.end_reason)
-    ambiguous = {k: n for k, n in record.rejections.items() if "second answer" in k}
+    ambiguous = {k: n for k, n in record.rejections.items() if SECOND_ANSWER in k}
     # states refused for not continuing the run although they were on its clock: a second
     # publisher sends states of this run, and the nodes cannot tell which one they answered
     # (the simulator's own may have been the refused one)
     maneuver = NODE_NAMES[Role.MANEUVER]
     doubled = {k: n for k, n in record.rejections.items() if k.startswith(maneuver) and (
-        "not after the previous state" in k or (config.lockstep and "skips states" in k))}
+        NOT_AFTER_PREVIOUS in k or (config.lockstep and SKIPS_STATES in k))}
     stop = str(state.sim_final.stop_reason)
     if doubled:  # whatever followed, the run's inputs are not certain
         record.outcome = Outcome.FAILED

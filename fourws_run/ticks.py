@@ -306,7 +306,7 @@ class LockstepAnswers:
         tick = self.awaited
         if tick is not None and stamp_ns == tick.stamp_ns:
             if self.driver is not None:
-                return self.rejections.add(topic, "second answer to one state",
+                return self.rejections.add(topic, SECOND_ANSWER,
                                            f"t = {tick.t:.3f} s")
             problem = self.limits.driver_problem(cmd)
             if problem:
@@ -316,7 +316,7 @@ class LockstepAnswers:
             return True
         if stamp_ns in self._past:
             # the tick ran on one answer already: whichever came first, one publisher too many
-            return self.rejections.add(topic, "second answer to one state",
+            return self.rejections.add(topic, SECOND_ANSWER,
                                        f"stamp {stamp_ns} ns, after the tick ran")
         return self.rejections.add(topic, "stamp of no published state",
                                    f"stamp {stamp_ns} ns")
@@ -331,7 +331,7 @@ class LockstepAnswers:
                 return self.rejections.add(topic, "step and stamp of different states",
                                            f"step {step}, stamp {stamp_ns} ns")
             if self.rear_rad is not None:
-                return self.rejections.add(topic, "second answer to one state",
+                return self.rejections.add(topic, SECOND_ANSWER,
                                            f"step {step}")
             problem = self.limits.command_problem(angle_rad)
             if problem:
@@ -346,7 +346,7 @@ class LockstepAnswers:
                 self.late_commands += 1
                 self._past[stamp_ns] = (step, True)
                 return False
-            return self.rejections.add(topic, "second answer to one state",
+            return self.rejections.add(topic, SECOND_ANSWER,
                                        f"step {step}, after the tick ran")
         return self.rejections.add(topic, "step of no published state", f"step {step}")
 
@@ -438,7 +438,7 @@ class RealtimeAnswers:
             return self.rejections.add(topic, "step and stamp of no published state",
                                        f"step {step}, stamp {stamp_ns} ns")
         if step == self._rear_step:
-            return self.rejections.add(topic, "second answer to one state", f"step {step}")
+            return self.rejections.add(topic, SECOND_ANSWER, f"step {step}")
         if step < self._rear_step:
             self.late_commands += 1
             return False
@@ -455,6 +455,14 @@ class RealtimeAnswers:
         if t_s - self.rear_state_time_s <= timeout_s:
             return self.rear_rad, False
         return 0.0, True
+
+
+#: Refusal reasons the run's outcome depends on (the launcher reads them from the nodes'
+#: rejection counts): a second answer to one state, and states that do not continue the run
+#: although they are on its clock (a second publisher of states).
+SECOND_ANSWER = "second answer to one state"
+NOT_AFTER_PREVIOUS = "not after the previous state"
+SKIPS_STATES = "skips states"
 
 
 class StateGate:
@@ -504,11 +512,11 @@ class StateGate:
                 return self.rejections.add(topic, "run does not start at step 0",
                                            f"step {step}")
         elif step <= last:
-            return self.rejections.add(topic, "not after the previous state",
+            return self.rejections.add(topic, NOT_AFTER_PREVIOUS,
                                        f"step {step} after {last}")
         elif (step - last != self.every if self.lockstep
               else step - last > self.max_gap_steps):
-            return self.rejections.add(topic, "skips states", f"step {step} after {last}")
+            return self.rejections.add(topic, SKIPS_STATES, f"step {step} after {last}")
         self.last_step = step
         return True
 
@@ -659,6 +667,7 @@ class FlowWindow:
 
 
 __all__ = ["FRONT_ANGLE_LIMIT_RAD", "FlowWindow", "InputLimits", "LATENESS_BINS",
-           "LATENESS_BIN_S", "LockstepAnswers", "MULTIPLE_RTOL", "Pacer", "RealtimeAnswers",
+           "NOT_AFTER_PREVIOUS", "SECOND_ANSWER", "SKIPS_STATES", "LATENESS_BIN_S",
+           "LockstepAnswers", "MULTIPLE_RTOL", "Pacer", "RealtimeAnswers",
            "Rejections", "STEERING_WHEEL_LIMIT_RAD", "StateGate", "TICK_MEMORY", "Tick",
            "TickEngine", "law_input", "simulator_inputs", "whole_multiple"]
