@@ -421,14 +421,23 @@ class UniformRun:
         return str(man.get("type", "")) if isinstance(man, Mapping) else str(man or "")
 
 
-def _monotonic(time_s: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sort by time and drop repeated stamps (keep the last message of a stamp)."""
+def _monotonic(time_s: np.ndarray, values: np.ndarray,
+               order_keep: tuple[np.ndarray, np.ndarray] | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Sort by time and drop repeated stamps (keep the last message of a stamp);
+    ``order_keep``: :func:`_order_keep` of ``time_s`` when the caller has it."""
+    order, keep = _order_keep(time_s) if order_keep is None else order_keep
+    return time_s[order][keep], values[order][keep]
+
+
+def _order_keep(time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The stable time order of ``time_s`` and, in that order, which stamps are kept (the
+    last of each repeated stamp)."""
     order = np.argsort(time_s, kind="stable")
     t = time_s[order]
-    v = values[order]
     keep = np.ones(t.size, dtype=bool)
     keep[:-1] = np.diff(t) > 0.0
-    return t[keep], v[keep]
+    return order, keep
 
 
 def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
@@ -454,7 +463,8 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
     if t_raw.size < 2:
         raise BagError(f"bag {run.path!r}: {TOPIC_STATE} has {t_raw.size} message(s); "
                        "need at least 2")
-    order_t, _ = _monotonic(t_raw, t_raw)
+    state_order = _order_keep(t_raw)
+    order_t, _ = _monotonic(t_raw, t_raw, state_order)
     recorded_dt_s = float(np.median(np.diff(order_t)))
     if not (math.isfinite(recorded_dt_s) and recorded_dt_s > 0.0):
         raise BagError(f"bag {run.path!r}: {TOPIC_STATE} stamps do not advance")
@@ -473,17 +483,19 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
     channels: dict[str, np.ndarray] = {}
     for name in STATE_CHANNELS:
         if name in state.fields:
-            t, v = _monotonic(t_raw, state.fields[name].astype(np.float64))
+            t, v = _monotonic(t_raw, state.fields[name].astype(np.float64), state_order)
             channels[name] = np.interp(grid, t, v)
     driver = run.topics.get(TOPIC_DRIVER)
     if driver is not None and len(driver) >= 2 and "steering_wheel_angle_rad" in driver.fields:
         # zero-order hold: a driver command holds until the next one
+        driver_order = _order_keep(driver.time_s)
         for src, dst in (("steering_wheel_angle_rad", "steering_wheel_angle_rad"),
                          ("front_wheel_angle_rad", "front_wheel_angle_cmd_rad"),
                          ("steering_torque_nm", "steering_torque_nm")):
             if src not in driver.fields:
                 continue
-            t, v = _monotonic(driver.time_s, driver.fields[src].astype(np.float64))
+            t, v = _monotonic(driver.time_s, driver.fields[src].astype(np.float64),
+                              driver_order)
             idx = np.clip(np.searchsorted(t, grid + 1e-12, side="right") - 1, 0, t.size - 1)
             channels[dst] = v[idx]
     else:

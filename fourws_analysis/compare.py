@@ -273,7 +273,7 @@ def _eightdof_loop(vehicle: Any, speed_mps: float, law: Any, belief_vehicle: Any
     ``(a, b, gains, model module)``, ``delta_r = K_x x + K_u u``. ``law`` is a name (built on
     the belief vehicle with ``law_options``) or a built law."""
     mod = get_model("8dof")
-    key = json.dumps([vehicle.to_dict(), float(speed_mps)], sort_keys=True, default=str)
+    key = json.dumps([vehicle.cache_key(), float(speed_mps)])
     if key not in _JACOBIAN_CACHE:
         p = mod.params_for(vehicle)
         x0 = mod.initial_state(p, speed_mps)
@@ -293,6 +293,20 @@ def _coupled(a_cl: np.ndarray) -> np.ndarray:
     position, which nothing depends on (its eigenvalues s = 0, z = 1 are left out). The
     heading stays: it moves the lateral position, and it keeps one zero eigenvalue."""
     return np.nonzero(np.any(np.abs(a_cl) > 0.0, axis=0))[0]
+
+
+def eightdof_closed_matrices(vehicle: Any, speed_mps: float, law: Any = "fws",
+                             belief_vehicle: Any = None,
+                             law_options: Mapping[str, Any] | None = None
+                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, LinearGains, Any]:
+    """The matrices of :func:`eightdof_linear_system` without its state-space object (a
+    study's eigenvalues need A alone): ``(A_cl, B_cl, kept state indices, the law's gains,
+    the model module)``, A and B reduced to the kept states."""
+    a, b, g, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
+    i = mod.INPUT
+    a_cl, b_cl = linear.close_loop(a, b, g, i.DELTA_R, [i.DELTA_F])
+    keep = _coupled(a_cl)
+    return a_cl[np.ix_(keep, keep)], b_cl[keep], keep, g, mod
 
 
 def eightdof_linear_system(vehicle: Any, speed_mps: float, law: Any = "fws",
@@ -316,12 +330,11 @@ def eightdof_linear_system(vehicle: Any, speed_mps: float, law: Any = "fws",
         ``yaw_rate_radps``, ``sideslip_rad`` (V/U), ``lateral_accel_mps2`` (dV/dt + U r),
         ``roll_rad`` and ``rear_wheel_angle_rad`` (the law's command).
     """
-    a, b, g, mod = _eightdof_loop(vehicle, speed_mps, law, belief_vehicle, law_options)
+    a_cl, b_cl, keep, g, mod = eightdof_closed_matrices(vehicle, speed_mps, law,
+                                                        belief_vehicle, law_options)
     s, i = mod.STATE, mod.INPUT
-    a_cl, b_cl = linear.close_loop(a, b, g, i.DELTA_R, [i.DELTA_F])
-    keep = _coupled(a_cl)
-    a_cl, b_cl, k_x = a_cl[np.ix_(keep, keep)], b_cl[keep], g.K_x[keep]
-    e = np.eye(a.shape[0])[:, keep]  # row j: state j in the reduced coordinates
+    k_x = g.K_x[keep]
+    e = np.eye(g.K_x.size)[:, keep]  # row j: state j in the reduced coordinates
     i_v = list(keep).index(s.V)
     outputs = {"yaw_rate_radps": (e[s.R], 0.0), "sideslip_rad": (e[s.V] / speed_mps, 0.0),
                "lateral_accel_mps2": (a_cl[i_v] + speed_mps * e[s.R], float(b_cl[i_v, 0])),
@@ -553,8 +566,8 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
                 lat = _lateral_modes(r)
                 arr[k, :lat.size] = lat
             return linearize.EigenSweep("8dof", np.asarray(SWEEP_SPEEDS_MPS), arr)
-        key = json.dumps([vehicle.to_dict(), res.law,
-                          belief.to_dict() if belief is not None else None, dict(options)],
+        key = json.dumps([vehicle.cache_key(), res.law,
+                          belief.cache_key() if belief is not None else None, dict(options)],
                          sort_keys=True, default=str)
         if key not in _SWEEP_CACHE:  # runs of one vehicle and law share their sweep
             _SWEEP_CACHE[key] = _try(res, "eigenvalues_vs_speed", sweep)

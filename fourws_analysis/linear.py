@@ -158,6 +158,22 @@ def closed_loop(model_name: str, vehicle: Vehicle, law: Law | str | None,
     IncompatibleError
         The law cannot be written for the model.
     """
+    speed = check_speed(speed_mps)
+    A_cl, B_cl, law_obj, A, B = closed_loop_matrices(model_name, vehicle, law, speed)
+    smap = signal_map(model_name)
+    names, C, D = _standard_outputs(A_cl, B_cl, smap.state_names, speed)
+    inputs = [smap.input_names[i] for i in smap.driver_inputs]
+    system = control.ss(A_cl, B_cl, C, D, inputs=inputs, outputs=names,
+                        states=list(smap.state_names), name=f"{model_name} {law_obj.name}")
+    return ClosedLoop(model_name, law_obj.name, speed, system, A, B[:, smap.rear_input])
+
+
+def closed_loop_matrices(model_name: str, vehicle: Vehicle, law: Law | str | None,
+                         speed_mps: float
+                         ) -> tuple[np.ndarray, np.ndarray, Law, np.ndarray, np.ndarray]:
+    """The matrices of :func:`closed_loop` without its state-space object (a study's
+    eigenvalues need A alone): ``(A_cl, B_cl, law, A_open, B_open)``; the same checks and
+    errors."""
     _check_model_name(model_name)
     speed = check_speed(speed_mps)
     law_obj = _law(law, vehicle)
@@ -168,11 +184,7 @@ def closed_loop(model_name: str, vehicle: Vehicle, law: Law | str | None,
     if not (np.all(np.isfinite(A_cl)) and np.all(np.isfinite(B_cl))):
         raise NonFiniteError(f"closed loop {model_name}/{law_obj.name} at {speed} m/s "
                              "is not finite")
-    names, C, D = _standard_outputs(A_cl, B_cl, smap.state_names, speed)
-    inputs = [smap.input_names[i] for i in smap.driver_inputs]
-    system = control.ss(A_cl, B_cl, C, D, inputs=inputs, outputs=names,
-                        states=list(smap.state_names), name=f"{model_name} {law_obj.name}")
-    return ClosedLoop(model_name, law_obj.name, speed, system, A, B[:, smap.rear_input])
+    return A_cl, B_cl, law_obj, A, B
 
 
 def close_loop(A: np.ndarray, B: np.ndarray, gains: LinearGains, rear_input: int,

@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import enum
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import get_types_from_msg
 
@@ -189,6 +191,13 @@ def time_to_ns(time_s: float) -> int:
     return int(round(float(time_s) * NS_PER_S))
 
 
+def times_to_ns(time_s: Any) -> Any:
+    """:func:`time_to_ns` of every element of an array (int64 array; the same rounding:
+    half to even of the float64 product)."""
+    product = np.asarray(time_s, dtype=np.float64) * NS_PER_S
+    return np.rint(product).astype(np.int64)
+
+
 __all__ = [
     "CLOCK", "DRIVER_INPUT", "FRAME_BODY", "FRAME_ODOM", "IMU", "LATCHED_TOPICS",
     "LEGACY_MSG_PACKAGES", "MANEUVER_COUNTED", "MANEUVER_STATUS", "MSG_DIR", "MSG_PACKAGE",
@@ -196,5 +205,5 @@ __all__ = [
     "ODOM", "REAR_STEER_CMD", "RECORDED_TOPICS", "RECORDER_STATUS", "RUN_CONFIG", "Role",
     "SIMULATOR_COUNTED", "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATE_ENVELOPE",
     "STATE_SCALARS", "STATE_WHEELS", "TOPIC_TYPES", "WHEELS", "WRITER_ROLES",
-    "state_output_fields", "time_to_ns",
+    "state_output_fields", "time_to_ns", "times_to_ns",
 ]

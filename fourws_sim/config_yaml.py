@@ -215,6 +215,17 @@ def parse_yaml(text: str | bytes, source: str = "<text>") -> Any:
             loader.dispose()
 
 
+def plain_copy(data: Any) -> Any:
+    """A copy of parsed YAML/JSON data: every dict and list copied, other values shared (as
+    ``copy.deepcopy`` of such data, many times faster; scalars and strings are immutable)."""
+    kind = type(data)
+    if kind is dict:
+        return {k: plain_copy(v) for k, v in data.items()}
+    if kind is list:
+        return [plain_copy(v) for v in data]
+    return data
+
+
 def read_yaml(path: str | Path) -> Any:
     """Read and parse a configuration file strictly (:func:`parse_yaml`).
 

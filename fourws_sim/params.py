@@ -27,6 +27,7 @@ set with no roll data is a valid vehicle that a 3-DOF model refuses with a clear
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 import sys
@@ -34,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Mapping
 
-from fourws_sim.config_yaml import read_yaml
+from fourws_sim.config_yaml import plain_copy, read_yaml
 from fourws_sim.errors import ParameterError, UnknownNameError, describe
 
 
@@ -497,8 +498,26 @@ class Vehicle:
         _validate_dataclass(new, self.source, "axle_tires.", self.unchecked_fields)
         return dataclasses.replace(self, axle_tires=new)
 
+    def cache_key(self) -> str:
+        """The vehicle as canonical JSON (its :meth:`to_dict`, keys sorted): equal for equal
+        vehicles, a key for caches of what is computed from a vehicle (a Jacobian, a law).
+        Computed once per instance (the vehicle is frozen)."""
+        key = self.__dict__.get("_cache_key")
+        if key is None:
+            key = json.dumps(self.to_dict(), sort_keys=True, default=repr)
+            object.__setattr__(self, "_cache_key", key)
+        return key
+
     def to_dict(self) -> dict[str, Any]:
-        """Plain mapping in the file layout (for recording a run's configuration)."""
+        """Plain mapping in the file layout (for recording a run's configuration); a new
+        mapping each call (built once per instance, then copied: the vehicle is frozen)."""
+        built = self.__dict__.get("_dict")
+        if built is None:
+            built = self._build_dict()
+            object.__setattr__(self, "_dict", built)
+        return plain_copy(built)
+
+    def _build_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"name": self.name, "description": self.description}
         for key in _SUBSYSTEMS:
             sub = getattr(self, key)
@@ -510,14 +529,73 @@ class Vehicle:
         return out
 
 
+#: Vehicles built by :func:`vehicle_from_mapping`, by the frozen form of their mapping and
+#: source (a study builds the same vehicle for many points; the analysis of a run builds its
+#: vehicle and belief from the run configuration).
+_BUILT: dict[tuple[Any, str], Vehicle] = {}
+_BUILT_SIZE = 256
+
+
+def _frozen(value: Any) -> Any:
+    """A hashable form of a parsed YAML/JSON value that tells apart what validation tells
+    apart (types included: ``1``, ``1.0`` and ``True`` differ); None if it has anything else
+    (then nothing is cached)."""
+    kind = type(value)
+    if kind in _SCALARS:
+        # NaN never equals itself: such a key just misses (and validation refuses NaN)
+        return (kind, value)
+    if kind is dict or isinstance(value, Mapping):
+        items = []
+        for k, v in value.items():
+            fv = _frozen(v)
+            if fv is None or type(k) not in _SCALARS:
+                return None
+            items.append(((type(k).__name__, k), fv))
+        try:
+            return ("m", tuple(sorted(items)))
+        except TypeError:
+            return None
+    if kind is list or kind is tuple:
+        parts = []
+        for v in value:
+            fv = _frozen(v)
+            if fv is None:
+                return None
+            parts.append(fv)
+        return (kind, tuple(parts))
+    return None
+
+
+_SCALARS = (str, float, int, bool, type(None))
+
+
 def vehicle_from_mapping(data: Any, source: str = "<mapping>") -> Vehicle:
     """Validate a vehicle mapping (file layout) and build a :class:`Vehicle`.
+
+    The vehicle of a mapping validated before (equal content and source) is returned again
+    (vehicles are frozen); a refused mapping is validated again each time.
 
     Raises
     ------
     ParameterError
         On a missing or unknown field, a non-number, a non-finite or out-of-range value.
     """
+    frozen = _frozen(data)
+    key = None if frozen is None else (frozen, source)
+    if key is not None:
+        built = _BUILT.get(key)
+        if built is not None:
+            return built
+    vehicle = _vehicle_from_mapping(data, source)
+    if key is not None:
+        if len(_BUILT) >= _BUILT_SIZE:
+            _BUILT.pop(next(iter(_BUILT)))
+        _BUILT[key] = vehicle
+    return vehicle
+
+
+def _vehicle_from_mapping(data: Any, source: str) -> Vehicle:
+    """:func:`vehicle_from_mapping` without the cache."""
     if isinstance(data, Mapping) and "/**" in data:
         try:
             data = data["/**"]["ros__parameters"]["vehicle"]

@@ -115,12 +115,10 @@ def columns(study: Study) -> list[tuple[str, str]]:
     return cols
 
 
-def law_for(config: RunConfig, belief_dict: dict[str, Any] | None = None) -> Law:
+def law_for(config: RunConfig) -> Law:
     """The run's law (:func:`fourws_study.kernel.build_law`), shared by the points of this
-    process with the same law, belief, period and options (``belief_dict``:
-    ``config.belief.to_dict()`` when the caller has it)."""
-    belief = config.belief.to_dict() if belief_dict is None else belief_dict
-    key = json.dumps([config.law, belief, config.controller_period_s,
+    process with the same law, belief, period and options."""
+    key = json.dumps([config.law, config.belief.cache_key(), config.controller_period_s,
                       dict(config.law_options)], sort_keys=True, default=str)
     law = _LAWS.get(key)
     if law is None:
@@ -147,7 +145,7 @@ def uniform_run(record: LoopRecord, config: RunConfig, name: str = "point",
     bag stamps them, put on the analysis grid by :func:`fourws_analysis.bag.resample`
     (``config_dict``: ``config.to_dict()`` when the caller has it)."""
     t, full = _with_final(record)
-    ns = np.array([interface.time_to_ns(v) for v in t], dtype=np.int64)
+    ns = interface.times_to_ns(t)
     stamps = stamp_seconds(ns // interface.NS_PER_S, ns % interface.NS_PER_S)
     n = record.time_s.size
     state = TopicArrays(stamps, {k: np.asarray(v, dtype=np.float64) for k, v in full.items()
@@ -218,17 +216,17 @@ def linear_stability(config: RunConfig, law: Law) -> dict[str, Any]:
     speed = config.speed_mps
     if config.vehicle.body is not None and config.vehicle.roll is not None:
         try:
-            sys8 = compare.eightdof_linear_system(config.vehicle, speed, law, config.belief,
-                                                  config.law_options)
-            eig = _modes(np.linalg.eigvals(sys8.A))
+            a8 = compare.eightdof_closed_matrices(config.vehicle, speed, law, config.belief,
+                                                  config.law_options)[0]
+            eig = _modes(np.linalg.eigvals(a8))
             out.update(_eig_columns("8dof_lin", eig))
         except (FourwsError, np.linalg.LinAlgError) as exc:
             notes.append(f"8dof linearized: {exc}")
     else:
         notes.append("8dof linearized: the vehicle has no roll and body data")
     try:
-        cl = linear.closed_loop(out["linear_model"], config.vehicle, law, speed)
-        out.update(_eig_columns("linear", _modes(np.linalg.eigvals(cl.A))))
+        a_lin = linear.closed_loop_matrices(out["linear_model"], config.vehicle, law, speed)[0]
+        out.update(_eig_columns("linear", _modes(np.linalg.eigvals(a_lin))))
     except (FourwsError, np.linalg.LinAlgError) as exc:
         notes.append(f"{out['linear_model']}: {exc}")
     out["linear_notes"] = "; ".join(notes)
@@ -300,7 +298,7 @@ def run_point(study: Study, index: int, compiled: bool = True) -> dict[str, Any]
         config = study.config(point)
         row["speed_mps"] = config.speed_mps
         config_dict = config.to_dict()
-        law = law_for(config, config_dict["belief_vehicle"])
+        law = law_for(config)
         evaluate(row, study, config, law, run_loop(config, law, compiled=compiled),
                  config_dict)
     except FourwsError as exc:

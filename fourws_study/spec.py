@@ -62,7 +62,6 @@ own). Errors are :class:`~fourws_sim.errors.ParameterError` naming the field and
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -76,6 +75,7 @@ from fourws_control import make_loop_law
 from fourws_control.registry import LAWS
 from fourws_run.config import RunConfig, software_versions
 from fourws_run.scenario import Scenario, load_scenario, scenario_from_mapping
+from fourws_sim.config_yaml import plain_copy
 from fourws_sim.errors import FourwsError, ParameterError, UnknownNameError
 from fourws_sim.maneuvers import ManeuverSpec, maneuver_spec_from_mapping
 from fourws_sim.models import eightdof
@@ -393,8 +393,8 @@ class Study:
     def _config(self, settings: tuple[tuple[Axis, Any], ...]) -> RunConfig:
         base = self.base
         sc = base.scenario
-        vehicle_map = copy.deepcopy(base.vehicle_map)
-        maneuver_map = copy.deepcopy(base.maneuver_map)
+        vehicle_map = plain_copy(base.vehicle_map)
+        maneuver_map = plain_copy(base.maneuver_map)
         scales = list(base.belief_scales)
         law = base.law
         belief_changes: list[tuple[Target, str, Any]] = []
@@ -413,8 +413,8 @@ class Study:
                     belief_changes.append((target, axis.op, value))
         source = self.source
         vehicle = vehicle_from_mapping(vehicle_map, source)
-        belief_map = copy.deepcopy(base.belief_map if base.belief_map is not None
-                                   else vehicle_map)
+        belief_map = plain_copy(base.belief_map if base.belief_map is not None
+                                else vehicle_map)
         for target, op, value in belief_changes:
             _apply(belief_map, target, op, value)
         belief_vehicle = (vehicle if base.belief_map is None and not belief_changes

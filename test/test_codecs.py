@@ -402,3 +402,11 @@ def test_decode_many_equals_one_by_one(tmp_path) -> None:
     other = codecs.StateEncoder("2dof", topics.FRAME_BODY).encode(_outputs(rng), 0.5, 500)
     assert cdr.decode_many(msgtype, raws + [other]) is None
     assert cdr.decode_many(topics.TOPIC_TYPES[topics.SIM_STATUS], raws) is None
+
+
+def test_stamps_of_an_array_round_as_one_stamp_does():
+    """interface.times_to_ns (the study's stamps of a whole run) equals time_to_ns element by
+    element, near-ties and negative times included."""
+    t = np.concatenate([np.arange(0, 5001) * 1e-3, [0.5e-9, 1.5e-9, 2.5e-9, -0.5e-9, 1e4 / 3,
+                                                    1234.5678901234567]])
+    assert interface.times_to_ns(t).tolist() == [interface.time_to_ns(v) for v in t]

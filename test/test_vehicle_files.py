@@ -260,3 +260,34 @@ def test_relaxation_length_negative(tmp_path):
     data = _base()
     data["tire"]["relaxation_length_m"] = -0.1
     assert "must be >= 0" in _expect(tmp_path, data, "tire.relaxation_length_m")
+
+
+def test_validated_vehicles_are_reused_only_for_equal_mappings():
+    """vehicle_from_mapping returns the vehicle of an equal mapping again (a study builds one
+    vehicle per point): the same instance for equal content and source, a new one when a
+    value, its type (int vs float) or the source differs, and a refused mapping is refused
+    every time (nothing of it is kept)."""
+    data = load_vehicle("table_8_1").to_dict()
+    first = vehicle_from_mapping(data, "a.yaml")
+    assert vehicle_from_mapping(yaml.safe_load(yaml.safe_dump(data)), "a.yaml") is first
+    assert vehicle_from_mapping(data, "b.yaml") is not first
+    heavier = load_vehicle("table_8_1").to_dict()
+    heavier["chassis"]["mass_kg"] = data["chassis"]["mass_kg"] + 1.0
+    other = vehicle_from_mapping(heavier, "a.yaml")
+    assert other.chassis.mass_kg == data["chassis"]["mass_kg"] + 1.0
+    as_int = load_vehicle("table_8_1").to_dict()
+    as_int["chassis"]["mass_kg"] = int(data["chassis"]["mass_kg"])
+    as_float = {**as_int, "chassis": {**as_int["chassis"],
+                                      "mass_kg": float(as_int["chassis"]["mass_kg"])}}
+    assert vehicle_from_mapping(as_int, "a.yaml") is not vehicle_from_mapping(as_float, "a.yaml")
+    bad = load_vehicle("table_8_1").to_dict()
+    bad["chassis"]["mass_kg"] = -5.0
+    for _ in range(2):
+        with pytest.raises(ParameterError, match="mass_kg"):
+            vehicle_from_mapping(bad, "a.yaml")
+    # to_dict hands out a new mapping each time: changing one leaves the vehicle as it was
+    out = first.to_dict()
+    out["chassis"]["mass_kg"] = 1.0
+    assert first.to_dict()["chassis"]["mass_kg"] == data["chassis"]["mass_kg"]
+    assert first.cache_key() == vehicle_from_mapping(data, "b.yaml").cache_key()
+    assert first.cache_key() != other.cache_key()
