@@ -36,7 +36,7 @@ import pyarrow as pa
 from threadpoolctl import threadpool_limits
 
 from fourws_sim.errors import ParameterError
-from fourws_study.point import run_point
+from fourws_study.point import run_points
 from fourws_study.spec import MAX_POINTS, Study
 from fourws_study.store import RESULTS, StudyStore, read_results, rows_to_table, schema
 
@@ -44,7 +44,8 @@ BACKENDS = ("local", "dask")
 
 
 def run_block(study: Study, points: range | list[int], compiled: bool = True) -> pa.Table:
-    """The rows of ``points`` (one task), as an Arrow table of the study's schema.
+    """The rows of ``points`` (one task), as an Arrow table of the study's schema: their
+    compiled runs in one call of the batch kernel (:func:`fourws_study.point.run_points`).
 
     The BLAS of numpy runs single-threaded meanwhile: a study already keeps every core busy
     with one point per worker, and threads contending for them made the small least-squares
@@ -52,7 +53,7 @@ def run_block(study: Study, points: range | list[int], compiled: bool = True) ->
     a 1000 x 10 ``lstsq`` here).
     """
     with threadpool_limits(limits=1):
-        rows = [run_point(study, i, compiled=compiled) for i in points]
+        rows = run_points(study, points, compiled)
     return rows_to_table(rows, schema(study))
 
 

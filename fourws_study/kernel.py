@@ -249,9 +249,34 @@ def _steering(man: Maneuver, speed: float, dt: float,
     return result
 
 
-def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
-    """Run ``config`` in one compiled call; the :class:`LoopRecord`, or why the twin must run
-    it (a string).
+@dataclass
+class Prepared:
+    """One point ready for the compiled loop (:func:`prepare_compiled`): the arguments of
+    :func:`fourws_study.loop_kernels.closed_loop` and what turns its output into a record.
+
+    ``group`` is what points of one compiled block call must share: tire variant,
+    integration step and steps per control period.
+    """
+
+    module: ModuleType
+    group: tuple[str, float, int]
+    x: np.ndarray
+    q: np.ndarray
+    cf: np.ndarray
+    cr: np.ndarray
+    hand: np.ndarray
+    front: np.ndarray
+    drv: np.ndarray
+    kind: int
+    law_params: np.ndarray
+    min_speed: float
+    angle_limit: float
+    max_step: float
+    abort_reason: str
+
+
+def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
+    """The compiled loop's arguments for ``config``, or why the twin must run it (a string).
 
     Parameters
     ----------
@@ -303,14 +328,18 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     gains = law.gain_function()
     assert gains is not None
     kind = next(i for i, f in enumerate(module.LAW_FUNCTIONS) if gains.function is f)
-    out = np.zeros((front_a.size + 1, module.N_CHANNELS))
-    t0 = time.perf_counter()
-    code, ticks = module.closed_loop(
-        x, p.arr, p.coeffs_front, p.coeffs_rear, float(dt), int(n_step), hand_a, front_a,
-        drv, int(kind), np.ascontiguousarray(gains.params), float(law.min_speed_mps),
-        float(actuator.angle_limit_rad), float(actuator.rate_limit_rad_per_s * float(period)),
-        out)
-    loop_seconds = time.perf_counter() - t0
+    return Prepared(module, (p.tire_name, float(dt), int(n_step)), x, p.arr, p.coeffs_front,
+                    p.coeffs_rear, hand_a, front_a, drv, int(kind),
+                    np.ascontiguousarray(gains.params, dtype=np.float64),
+                    float(law.min_speed_mps), float(actuator.angle_limit_rad),
+                    float(actuator.rate_limit_rad_per_s * float(period)),
+                    man.abort_reason or DURATION)
+
+
+def _record(prep: Prepared, code: int, out: np.ndarray, loop_seconds: float
+            ) -> LoopRecord | str:
+    """The record of one compiled run (``out``: its rows), or why the twin must run it."""
+    module = prep.module
     if code != module.DONE:
         return {module.DIVERGED: "the simulation diverged",
                 module.DRIVER_REFUSED: "a driver input the simulator refuses",
@@ -319,8 +348,69 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
     channels = {name: out[:-1, i].copy() for i, name in enumerate(module.CHANNELS)}
     final = {name: float(out[-1, i]) for i, name in enumerate(module.CHANNELS)
              if name in module.STATE_CHANNELS}
-    return LoopRecord(channels["sim_time_s"], channels, man.abort_reason or DURATION,
-                      "compiled", final=final, loop_seconds=loop_seconds)
+    return LoopRecord(channels["sim_time_s"], channels, prep.abort_reason, "compiled",
+                      final=final, loop_seconds=loop_seconds)
+
+
+def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
+    """Run ``config`` in one compiled call of the single-run kernel
+    (:func:`fourws_study.loop_kernels.closed_loop`); the :class:`LoopRecord`, or why the twin
+    must run it (a string)."""
+    prep = prepare_compiled(config, law)
+    if isinstance(prep, str):
+        return prep
+    out = np.zeros((prep.front.size + 1, prep.module.N_CHANNELS))
+    t0 = time.perf_counter()
+    code, _ticks = prep.module.closed_loop(
+        prep.x, prep.q, prep.cf, prep.cr, prep.group[1], prep.group[2], prep.hand,
+        prep.front, prep.drv, prep.kind, prep.law_params, prep.min_speed, prep.angle_limit,
+        prep.max_step, out)
+    return _record(prep, int(code), out, time.perf_counter() - t0)
+
+
+def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
+    """Run prepared points in one compiled call per group of equal tire, step and control
+    period (:func:`fourws_study.loop_kernels.closed_loop_block`); each point's record (its
+    ``loop_seconds`` the block's kernel time shared in proportion to its ticks), or why the
+    twin must run it. The records equal :func:`run_compiled`'s bit for bit
+    (``test/test_study.py``)."""
+    results: list[LoopRecord | str] = [""] * len(preps)
+    groups: dict[tuple[str, float, int], list[int]] = {}
+    for i, prep in enumerate(preps):
+        groups.setdefault(prep.group, []).append(i)
+    for (_, dt, n_step), members in groups.items():
+        block = [preps[i] for i in members]
+        module = block[0].module
+        n_ticks = np.array([p.front.size for p in block], dtype=np.int64)
+        width = int(n_ticks.max())
+        hand = np.zeros((len(block), width))
+        front = np.zeros((len(block), width))
+        for j, p in enumerate(block):
+            hand[j, :p.hand.size] = p.hand
+            front[j, :p.front.size] = p.front
+        sizes = np.array([p.law_params.size for p in block], dtype=np.int64)
+        law_start = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
+        law_flat = (np.concatenate([p.law_params for p in block]) if sizes.sum()
+                    else np.zeros(0))
+        out = np.zeros((len(block), width + 1, module.N_CHANNELS))
+        codes = np.zeros(len(block), dtype=np.int64)
+        ticks = np.zeros(len(block), dtype=np.int64)
+        x = np.ascontiguousarray(np.stack([p.x for p in block]))
+        t0 = time.perf_counter()
+        module.closed_loop_block(
+            x, np.stack([p.q for p in block]), np.stack([p.cf for p in block]),
+            np.stack([p.cr for p in block]), float(dt), int(n_step), hand, front, n_ticks,
+            np.stack([p.drv for p in block]), np.array([p.kind for p in block], np.int64),
+            np.ascontiguousarray(law_flat, dtype=np.float64), law_start,
+            np.array([p.min_speed for p in block]), np.array([p.angle_limit for p in block]),
+            np.array([p.max_step for p in block]), out, codes, ticks)
+        seconds = time.perf_counter() - t0
+        total = max(int(n_ticks.sum()), 1)
+        for j, i in enumerate(members):
+            n = int(n_ticks[j])
+            results[i] = _record(block[j], int(codes[j]), out[j, :n + 1],
+                                 seconds * n / total)
+    return results
 
 
 def run_loop(config: RunConfig, law: Law | None = None, compiled: bool = True) -> LoopRecord:
@@ -336,5 +426,6 @@ def run_loop(config: RunConfig, law: Law | None = None, compiled: bool = True) -
     return run_interpreted(config, fallback="compiled path not asked for")
 
 
-__all__ = ["DRIVEN_WHEELS", "LoopRecord", "TIME_STEERED", "build_law", "compiled_plan",
-           "loop_kernel_for", "run_compiled", "run_interpreted", "run_loop", "twin_record"]
+__all__ = ["DRIVEN_WHEELS", "LoopRecord", "Prepared", "TIME_STEERED", "build_law",
+           "compiled_plan", "loop_kernel_for", "prepare_compiled", "run_compiled",
+           "run_compiled_block", "run_interpreted", "run_loop", "twin_record"]

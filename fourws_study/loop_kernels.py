@@ -269,6 +269,44 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
     return DONE, n_ticks
 
 
+def closed_loop_block(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore[no-untyped-def]
+                      n_ticks, drv, law_kind, law_flat, law_start, min_speed, angle_limit,
+                      max_step, out, codes, ticks):
+    """:func:`closed_loop` of a block of points (same tire, step and control period) in one
+    call: point ``b`` runs ``closed_loop`` itself on row ``b`` of every per-point array, so
+    its numbers are those of its own single call, bit for bit.
+
+    Parameters
+    ----------
+    x : float64 array (B, N_STATE)
+        Initial states, advanced in place.
+    q, cf, cr : float64 arrays (B, ...)
+        Packed 8-DOF parameters and tire coefficients of each point.
+    dt, n_step : float, int
+        Integration step (s) and steps per control period, shared by the block.
+    hand, front : float64 arrays (B, T)
+        Steering of each tick (point ``b`` reads its first ``n_ticks[b]``).
+    n_ticks : int64 array (B,)
+    drv : float64 array (B, N_DRIVER)
+    law_kind : int64 array (B,)
+    law_flat, law_start : float64 array, int64 array (B + 1,)
+        The gain-function parameters of point ``b`` are ``law_flat[law_start[b]:
+        law_start[b + 1]]`` (laws differ in their number of parameters).
+    min_speed, angle_limit, max_step : float64 arrays (B,)
+    out : float64 array (B, T + 1, N_CHANNELS)
+        Point ``b`` fills its first ``n_ticks[b] + 1`` rows.
+    codes, ticks : int64 arrays (B,)
+        Each point's exit code and ticks recorded.
+    """
+    for b in range(x.shape[0]):
+        n = n_ticks[b]
+        code, k = closed_loop(x[b], q[b], cf[b], cr[b], dt, n_step, hand[b, :n], front[b, :n],
+                              drv[b], law_kind[b], law_flat[law_start[b]:law_start[b + 1]],
+                              min_speed[b], angle_limit[b], max_step[b], out[b, :n + 1])
+        codes[b] = code
+        ticks[b] = k
+
+
 # ------------------------------------------------------------------------------ compiling
 
 def _source_digest() -> str:
@@ -306,3 +344,4 @@ def _jit(func: Any) -> Any:
 _gains = numba.njit(inline="always", **JIT_OPTIONS)(_gains)
 _outputs = numba.njit(inline="always", **JIT_OPTIONS)(_outputs)
 closed_loop = _jit(closed_loop)
+closed_loop_block = _jit(closed_loop_block)

@@ -43,7 +43,8 @@ from fourws_control import Law, RearSteerActuator
 from fourws_run import interface
 from fourws_run.config import RunConfig
 from fourws_sim.errors import FourwsError
-from fourws_study.kernel import LoopRecord, build_law, run_loop
+from fourws_study.kernel import (LoopRecord, Prepared, build_law, prepare_compiled,
+                                 run_compiled_block, run_interpreted)
 from fourws_study.spec import Point, Study
 
 #: Eigenvalues closer to 0 than this (1/s) are the 8-DOF's coasting-speed and wheel-spin
@@ -291,24 +292,70 @@ def run_point(study: Study, index: int, compiled: bool = True) -> dict[str, Any]
         Take the compiled path where it applies (False: the interpreted twin for every
         point; the rows are the same).
     """
-    t0 = time.perf_counter()
-    point = study.point(index)
-    row = point_row(study, point)
-    try:
-        config = study.config(point)
-        row["speed_mps"] = config.speed_mps
-        config_dict = config.to_dict()
-        law = law_for(config)
-        evaluate(row, study, config, law, run_loop(config, law, compiled=compiled),
-                 config_dict)
-    except FourwsError as exc:
-        row.update(status="error", status_reason=str(exc))
-    except np.linalg.LinAlgError as exc:
-        row.update(status="error", status_reason=f"linear algebra failed: {exc}")
-    row["wall_time_s"] = time.perf_counter() - t0
-    return row
+    return run_points(study, [index], compiled)[0]
+
+
+def run_points(study: Study, indices: Iterable[int], compiled: bool = True
+               ) -> list[dict[str, Any]]:
+    """The result rows of points ``indices`` (one block of a study): their compiled runs in
+    one call of the batch kernel (:func:`fourws_study.kernel.run_compiled_block`), the
+    interpreted twin for the others; each row as :func:`run_point` gives it."""
+    rows: list[dict[str, Any]] = []
+    runs: list[tuple[RunConfig, Law] | None] = []
+    seconds: list[float] = []
+    preps: list[Prepared] = []
+    prepared: dict[int, int] = {}  # row -> its position in preps
+    fallback: dict[int, str] = {}
+    for n, index in enumerate(indices):
+        t0 = time.perf_counter()
+        point = study.point(index)
+        row = point_row(study, point)
+        rows.append(row)
+        runs.append(None)
+        try:
+            config = study.config(point)
+            row["speed_mps"] = config.speed_mps
+            law = law_for(config)
+            runs[n] = (config, law)
+            if compiled:
+                prep = prepare_compiled(config, law)
+                if isinstance(prep, str):
+                    fallback[n] = prep
+                else:
+                    prepared[n] = len(preps)
+                    preps.append(prep)
+            else:
+                fallback[n] = "compiled path not asked for"
+        except FourwsError as exc:
+            row.update(status="error", status_reason=str(exc))
+            runs[n] = None
+        except np.linalg.LinAlgError as exc:
+            row.update(status="error", status_reason=f"linear algebra failed: {exc}")
+            runs[n] = None
+        seconds.append(time.perf_counter() - t0)
+    records = run_compiled_block(preps) if preps else []
+    for n, row in enumerate(rows):
+        run = runs[n]
+        if run is None:
+            row["wall_time_s"] = seconds[n]
+            continue
+        t0 = time.perf_counter()
+        config, law = run
+        try:
+            record = records[prepared[n]] if n in prepared else fallback[n]
+            if isinstance(record, str):
+                record = run_interpreted(config, fallback=record)
+            else:
+                seconds[n] += record.loop_seconds
+            evaluate(row, study, config, law, record)
+        except FourwsError as exc:
+            row.update(status="error", status_reason=str(exc))
+        except np.linalg.LinAlgError as exc:
+            row.update(status="error", status_reason=f"linear algebra failed: {exc}")
+        row["wall_time_s"] = seconds[n] + (time.perf_counter() - t0)
+    return rows
 
 
 __all__ = ["STATUSES", "ZERO_MODE_PER_S", "analysis_metrics", "columns", "evaluate",
            "extremes_of", "law_for", "linear_model_of", "linear_stability", "point_row",
-           "run_point", "status_of", "uniform_run"]
+           "run_point", "run_points", "status_of", "uniform_run"]

@@ -35,7 +35,8 @@ from fourws_cli.main import main as fourws_main
 from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.maneuvers import DoubleLaneChangeParams
 from fourws_study.execute import run_study
-from fourws_study.kernel import build_law, run_compiled, run_interpreted
+from fourws_study.kernel import (build_law, prepare_compiled, run_compiled,
+                                 run_compiled_block, run_interpreted)
 from fourws_study.point import law_for, run_point
 from fourws_study.report import critical_speed_8dof_lin, write_study_report
 from fourws_study.spec import load_study
@@ -106,6 +107,37 @@ def test_compiled_point_equals_offline_twin_bit_for_bit(tmp_path, maneuver):
             == twin.driver["front_wheel_angle_rad"].tobytes()
         # the law acts: its rear steer is not zero (else the test would prove little)
         assert np.max(np.abs(twin.rear_angle_rad)) > 1e-4
+
+
+def test_batch_kernel_equals_the_single_run_kernel_bit_for_bit(tmp_path):
+    """One call of the batch kernel over a block mixing laws with gain functions of different
+    parameter counts (closed form, 3-DOF fit, LQR table), speeds, a spinning point and two
+    maneuvers of different lengths gives each point the arrays of its own single-run call to
+    the last bit (the block pads steering and output rows; a point must read only its own)."""
+    preps, singles = [], []
+    for maneuver, speeds in ((STEP, [60.0, 130.0]), (SINE, [90.0])):
+        study = _study(tmp_path, f"block_{maneuver['type']}", scenario=_scenario(maneuver),
+                       grid={"speed_kmh": speeds, "belief.cornering_stiffness_scale": [0.7],
+                             "law": ["fws", "sol1", "rwc4_3dof", "lqr"]})
+        for point in study.points():
+            config = study.config(point)
+            law = build_law(config)
+            prep = prepare_compiled(config, law)
+            assert not isinstance(prep, str), prep
+            preps.append(prep)
+            singles.append(run_compiled(config, law))
+    assert len({p.front.size for p in preps}) == 2  # blocks of unequal runs
+    batch = run_compiled_block(preps)
+    assert len(batch) == len(singles) == 12
+    for got, want in zip(batch, singles):
+        assert not isinstance(got, str) and not isinstance(want, str)
+        assert got.channels.keys() == want.channels.keys()
+        for name, values in want.channels.items():
+            assert got.channels[name].tobytes() == values.tobytes(), name
+        assert got.final == want.final and got.end_reason == want.end_reason
+    # the block holds a point that spins (fws at 130 km/h is past the critical speed): its
+    # neighbours are unaffected, as compared above
+    assert max(np.max(np.abs(r.channels["sideslip_rad"])) for r in batch) > 0.2
 
 
 def test_study_rows_do_not_depend_on_the_path(tmp_path):
