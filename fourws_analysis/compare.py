@@ -280,7 +280,8 @@ def _eightdof_loop(vehicle: Any, speed_mps: float, law: Any, belief_vehicle: Any
         u0 = np.zeros(len(mod.INPUT))
         if len(_JACOBIAN_CACHE) >= _JACOBIAN_CACHE_SIZE:
             _JACOBIAN_CACHE.pop(next(iter(_JACOBIAN_CACHE)))
-        _JACOBIAN_CACHE[key] = linearize.jacobians(mod.derivatives, x0, u0, p)
+        _JACOBIAN_CACHE[key] = linearize.jacobians(linearize.model_derivatives(mod), x0,
+                                                   u0, p)
     a, b = (m.copy() for m in _JACOBIAN_CACHE[key])
     law_obj = law if isinstance(law, Law) else make_law(
         law, belief_vehicle if belief_vehicle is not None else vehicle,

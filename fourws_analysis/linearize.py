@@ -31,6 +31,13 @@ REL_STEP = 1e-6
 Derivatives = Callable[[float, np.ndarray, np.ndarray, Any], np.ndarray]
 
 
+def model_derivatives(mod: Any) -> Derivatives:
+    """The derivatives a linearization of model module ``mod`` differentiates: its compiled
+    right-hand side where it has one (``derivatives_compiled``: the 8-DOF, equal to its
+    NumPy reference to round-off), else its ``derivatives``."""
+    return getattr(mod, "derivatives_compiled", mod.derivatives)
+
+
 def jacobians(derivatives: Derivatives, x0: np.ndarray, u0: np.ndarray, p: Any,
               t: float = 0.0, rel_step: float = REL_STEP) -> tuple[np.ndarray, np.ndarray]:
     """State and input Jacobians (A, B) of ``derivatives`` at ``(x0, u0)``.
@@ -154,7 +161,7 @@ def eightdof_loop(vehicle: Any, speed_mps: float, law: Any = "fws",
     name = "8dof-free" if free_steering else "8dof"
     mod = get_model(name)
     p = mod.params_for(vehicle)
-    a, b = jacobians(mod.derivatives, mod.initial_state(p, speed_mps),
+    a, b = jacobians(model_derivatives(mod), mod.initial_state(p, speed_mps),
                      np.zeros(len(mod.INPUT)), p)
     law_obj = law if isinstance(law, Law) else make_law(
         law, belief_vehicle if belief_vehicle is not None else vehicle,
@@ -188,7 +195,7 @@ def eigenvalues_vs_speed(vehicle: Any, speeds_mps: Sequence[float], model: str =
     rows = []
     for speed in speeds_mps:
         x0, u0, p = _trim(mod, vehicle, float(speed))
-        a, _ = jacobians(mod.derivatives, x0, u0, p)
+        a, _ = jacobians(model_derivatives(mod), x0, u0, p)
         ev = np.linalg.eigvals(a)
         if drop_zero:
             ev = np.where(np.abs(ev) < 1e-9, np.nan, ev)

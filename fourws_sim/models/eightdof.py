@@ -795,6 +795,17 @@ def derivatives(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray
     return evaluate(t, x, u, p)[0]
 
 
+def derivatives_compiled(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
+    """dx/dt of the compiled kernels the simulator integrates (:attr:`Kernels.rhs` of the
+    parameters' tire), the signature of :func:`derivatives`; equal to it to round-off
+    (``test_eightdof_regression``) and about a hundred times faster: the linearizations
+    (:func:`fourws_analysis.linearize.jacobians`) differentiate it."""
+    dx = np.zeros(N_STATE)
+    kernels_for(p.tire_name).rhs(np.array(x, dtype=np.float64), np.array(u, dtype=np.float64),
+                                 p.arr, p.coeffs_front, p.coeffs_rear, dx, np.zeros(N_AUX))
+    return dx
+
+
 # ---------------------------------------------------------------------------------------------
 # Compiled kernels
 # ---------------------------------------------------------------------------------------------

@@ -12,8 +12,8 @@ compiled kernels (the system is a flag in the parameters).
 
 from __future__ import annotations
 
-from fourws_sim.models.eightdof import (INPUT, PARAM, STATE, Params, derivatives, evaluate,
-                                        initial_state)
+from fourws_sim.models.eightdof import (INPUT, PARAM, STATE, Params, derivatives,
+                                        derivatives_compiled, evaluate, initial_state)
 from fourws_sim.models.eightdof import params_for as _fixed_params_for
 from fourws_sim.params import Vehicle
 
@@ -36,5 +36,5 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
     return _fixed_params_for(vehicle, tire, v_min_mps=v_min_mps, free_steering=True)
 
 
-__all__ = ["FRONT_ANGLE_STATE", "INPUT", "PARAM", "STATE", "Params", "derivatives", "evaluate",
-           "initial_state", "params_for"]
+__all__ = ["FRONT_ANGLE_STATE", "INPUT", "PARAM", "STATE", "Params", "derivatives",
+           "derivatives_compiled", "evaluate", "initial_state", "params_for"]
