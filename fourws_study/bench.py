@@ -53,7 +53,7 @@ BENCH_STUDY = {
     "grid": {"belief.cornering_stiffness_scale": [0.7, 1.0, 1.3],
              "speed_kmh": {"from": 60, "to": 140, "step": 10},
              "law": ["fws", "sol1", "rwc2_3dof", "rwc4_3dof"]},
-    "block_size": 9,
+    "block_size": 16,
 }
 
 

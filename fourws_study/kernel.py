@@ -255,7 +255,9 @@ class Prepared:
     :func:`fourws_study.loop_kernels.closed_loop` and what turns its output into a record.
 
     ``group`` is what points of one compiled block call must share: tire variant,
-    integration step and steps per control period.
+    integration step and steps per control period. ``lanes``: the point can run in the
+    vector-instruction batch kernel (:func:`fourws_study.loop_kernels.closed_loop_lanes`: its
+    tire has lane kernels and the coefficients they take).
     """
 
     module: ModuleType
@@ -273,6 +275,7 @@ class Prepared:
     angle_limit: float
     max_step: float
     abort_reason: str
+    lanes: bool = False
 
 
 def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
@@ -328,12 +331,16 @@ def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
     gains = law.gain_function()
     assert gains is not None
     kind = next(i for i, f in enumerate(module.LAW_FUNCTIONS) if gains.function is f)
+    condition = getattr(p.tire, "LANE_CONDITION", None)  # a coefficient lanes need
+    lanes = module.HAS_LANES and (condition is None or all(
+        float(coeffs[condition[0]]) == condition[1]
+        for coeffs in (p.coeffs_front, p.coeffs_rear)))
     return Prepared(module, (p.tire_name, float(dt), int(n_step)), x, p.arr, p.coeffs_front,
                     p.coeffs_rear, hand_a, front_a, drv, int(kind),
                     np.ascontiguousarray(gains.params, dtype=np.float64),
                     float(law.min_speed_mps), float(actuator.angle_limit_rad),
                     float(actuator.rate_limit_rad_per_s * float(period)),
-                    man.abort_reason or DURATION)
+                    man.abort_reason or DURATION, lanes)
 
 
 def _record(prep: Prepared, code: int, out: np.ndarray, loop_seconds: float
@@ -397,7 +404,9 @@ def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
         ticks = np.zeros(len(block), dtype=np.int64)
         x = np.ascontiguousarray(np.stack([p.x for p in block]))
         t0 = time.perf_counter()
-        module.closed_loop_block(
+        kernel = (module.closed_loop_lanes if all(p.lanes for p in block)
+                  else module.closed_loop_block)
+        kernel(
             x, np.stack([p.q for p in block]), np.stack([p.cf for p in block]),
             np.stack([p.cr for p in block]), float(dt), int(n_step), hand, front, n_ticks,
             np.stack([p.drv for p in block]), np.array([p.kind for p in block], np.int64),

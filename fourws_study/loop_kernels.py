@@ -51,15 +51,20 @@ from fourws_control.sol2 import sol2_gains
 import fourws_control.sol2
 from fourws_sim.drivers import speed_hold_request, split_brake_torque
 import fourws_sim.drivers
+import fourws_sim.lanes
+import fourws_sim.trig
 from fourws_sim.models import eightdof, eightdof_kernels
+from fourws_sim.lanes import LANES
 from fourws_sim.models.eightdof import (INPUT, N_AUX, N_INPUT, N_STATE, STATE, aux_from_array,
-                                        kernels_for)
+                                        kernels_for, lane_kernels_for)
 from fourws_sim.params import GRAVITY_MPS2
 from fourws_sim.tires import get_tire
 
 #: Tire model of this variant (set by ``loop_kernel_for`` before the module body runs).
 TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
 _KERNELS = kernels_for(TIRE_NAME)
+#: The tire's batch kernels of LANES points (None: the tire has no lane function).
+_LANES = lane_kernels_for(TIRE_NAME)
 _rk4 = _KERNELS.rk4
 _rhs = _KERNELS.rhs
 
@@ -149,6 +154,90 @@ def _outputs(x, u, q, cf, cr, dx, aux, t, row):  # type: ignore[no-untyped-def]
     row[C_DR] = aux[a_dr]
 
 
+def _answer(x, u, q, cf, cr, dx, aux, k, dt, n_step, row, hand_k,  # type: ignore
+            front_k, drv, law_kind, law_params, min_speed, angle_limit, max_step, carry,
+            drive, brake, k_gain):
+    """Tick ``k`` of a closed loop up to the integration: the tick's outputs into ``row``
+    (``Simulator.outputs()`` of ``x`` with the input ``u`` held since the last step), the
+    maneuver node's answer (its steering, the speed-hold driver), the controller's (the law
+    through the actuator), and the input the simulator holds for the next control period,
+    written into ``u``. ``carry`` holds the driver's integral, the time of its last answer
+    and the actuator's angle between ticks. Returns ``DONE`` or why the twin must take
+    over."""
+    t = (k * n_step) * dt
+    _outputs(x, u, q, cf, cr, dx, aux, t, row)
+    U = x[i_u]
+    V = x[i_v]
+    r = x[i_r]
+    phi = x[i_phi]
+    p = x[i_p]
+    # the maneuver node's answer: its steering, and the speed-hold driver
+    d_f = front_k
+    for i in range(4):
+        drive[i] = 0.0
+        brake[i] = 0.0
+    if drv[D_ENABLED] != 0.0 and drv[D_RADIUS] > 0.0:
+        dt_drv = 0.0 if k == 0 else max(t - carry[1], 0.0)
+        request, carry[0] = speed_hold_request(
+            drv[D_TARGET] - U, carry[0], dt_drv, drv[D_KP], drv[D_KI], drv[D_MAX_DECEL],
+            drv[D_MAX_ACCEL])
+        total = drv[D_MASS] * drv[D_RADIUS] * (request + drv[D_ROLLING] * G)
+        if total >= 0.0:
+            share = total / drv[D_N_DRIVEN]
+            for i in range(4):
+                if drv[D_DRIVEN_FL + i] != 0.0:
+                    drive[i] = share
+        else:
+            bfl, bfr, brl, brr = split_brake_torque(-total, drv[D_BRAKE_FRONT])
+            brake[0] = bfl
+            brake[1] = bfr
+            brake[2] = brl
+            brake[3] = brr
+    carry[1] = t
+    torque_limit = drv[D_TORQUE_LIMIT]
+    for i in range(4):
+        if not (abs(drive[i]) <= torque_limit and abs(brake[i]) <= torque_limit):
+            return DRIVER_REFUSED
+    # the controller node's answer: the law through the actuator
+    speed, scale = gain_speed(U, min_speed)
+    _gains(law_kind, speed, law_params, k_gain)
+    if scale != 1.0:
+        for i in range(5):
+            k_gain[i] = k_gain[i] * scale
+    for i in range(5):
+        if not math.isfinite(k_gain[i]):
+            return LAW_FAILED
+    c = rear_angle_of(k_gain, d_f, r, phi, p, V)
+    if not math.isfinite(c):
+        return LAW_FAILED
+    angle = actuator_step(carry[2], c, angle_limit, max_step)
+    carry[2] = angle
+    if abs(angle) > drv[D_REAR_LIMIT] * (1.0 + 1e-12):
+        return COMMAND_REFUSED
+    row[C_HAND] = hand_k
+    row[C_FRONT] = d_f
+    row[C_LAW] = c
+    row[C_REAR] = angle
+    row[C_DRIVE] = drive[0] + drive[1] + drive[2] + drive[3]
+    row[C_BRAKE] = brake[0] + brake[1] + brake[2] + brake[3]
+    # the simulator integrates one control period holding both answers
+    u[j_df] = d_f
+    u[j_dr] = angle
+    u[j_st] = 0.0
+    for i in range(4):
+        u[j_d0 + i] = drive[i]
+        u[j_b0 + i] = brake[i]
+    return DONE
+
+
+def _final(x, u, q, cf, cr, dx, aux, n_ticks, dt, n_step, row):  # type: ignore
+    """The state after the last tick into ``row`` (its command columns NaN): the state the
+    simulator publishes last and the maneuver answers as done."""
+    _outputs(x, u, q, cf, cr, dx, aux, (n_ticks * n_step) * dt, row)
+    for c in range(C_HAND, N_CHANNELS):
+        row[c] = math.nan
+
+
 def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-untyped-def]
                 law_kind, law_params, min_speed, angle_limit, max_step, out):
     """Run ``out.shape[0]`` control ticks from state ``x`` (modified in place).
@@ -190,82 +279,16 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
     k_gain = np.zeros(5)
     drive = np.zeros(4)
     brake = np.zeros(4)
-    integral = 0.0
-    t_prev = 0.0
-    angle = 0.0
-    enabled = drv[D_ENABLED] != 0.0 and drv[D_RADIUS] > 0.0
-    torque_limit = drv[D_TORQUE_LIMIT]
+    carry = np.zeros(3)  # the driver's integral and last time, the actuator's angle
     for k in range(n_ticks):
-        # the tick's outputs: Simulator.outputs() with the input held since the last step
-        t = (k * n_step) * dt
-        row = out[k]
-        _outputs(x, u, q, cf, cr, dx, aux, t, row)
-        U = x[i_u]
-        V = x[i_v]
-        r = x[i_r]
-        phi = x[i_phi]
-        p = x[i_p]
-        # the maneuver node's answer: its steering, and the speed-hold driver
-        d_f = front[k]
-        for i in range(4):
-            drive[i] = 0.0
-            brake[i] = 0.0
-        if enabled:
-            dt_drv = 0.0 if k == 0 else max(t - t_prev, 0.0)
-            request, integral = speed_hold_request(
-                drv[D_TARGET] - U, integral, dt_drv, drv[D_KP], drv[D_KI], drv[D_MAX_DECEL],
-                drv[D_MAX_ACCEL])
-            total = drv[D_MASS] * drv[D_RADIUS] * (request + drv[D_ROLLING] * G)
-            if total >= 0.0:
-                share = total / drv[D_N_DRIVEN]
-                for i in range(4):
-                    if drv[D_DRIVEN_FL + i] != 0.0:
-                        drive[i] = share
-            else:
-                bfl, bfr, brl, brr = split_brake_torque(-total, drv[D_BRAKE_FRONT])
-                brake[0] = bfl
-                brake[1] = bfr
-                brake[2] = brl
-                brake[3] = brr
-        t_prev = t
-        for i in range(4):
-            if not (abs(drive[i]) <= torque_limit and abs(brake[i]) <= torque_limit):
-                return DRIVER_REFUSED, k
-        # the controller node's answer: the law through the actuator
-        speed, scale = gain_speed(U, min_speed)
-        _gains(law_kind, speed, law_params, k_gain)
-        if scale != 1.0:
-            for i in range(5):
-                k_gain[i] = k_gain[i] * scale
-        for i in range(5):
-            if not math.isfinite(k_gain[i]):
-                return LAW_FAILED, k
-        c = rear_angle_of(k_gain, d_f, r, phi, p, V)
-        if not math.isfinite(c):
-            return LAW_FAILED, k
-        angle = actuator_step(angle, c, angle_limit, max_step)
-        if abs(angle) > drv[D_REAR_LIMIT] * (1.0 + 1e-12):
-            return COMMAND_REFUSED, k
-        row[C_HAND] = hand[k]
-        row[C_FRONT] = d_f
-        row[C_LAW] = c
-        row[C_REAR] = angle
-        row[C_DRIVE] = drive[0] + drive[1] + drive[2] + drive[3]
-        row[C_BRAKE] = brake[0] + brake[1] + brake[2] + brake[3]
-        # the simulator integrates one control period holding both answers
-        u[j_df] = d_f
-        u[j_dr] = angle
-        u[j_st] = 0.0
-        for i in range(4):
-            u[j_d0 + i] = drive[i]
-            u[j_b0 + i] = brake[i]
+        code = _answer(x, u, q, cf, cr, dx, aux, k, dt, n_step, out[k], hand[k], front[k],
+                       drv, law_kind, law_params, min_speed, angle_limit, max_step, carry,
+                       drive, brake, k_gain)
+        if code != DONE:
+            return code, k
         if _rk4(x, u, q, cf, cr, dt, n_step) < n_step:
             return DIVERGED, k + 1
-    # the final state, which the simulator publishes and the maneuver answers as done
-    final = out[n_ticks]
-    _outputs(x, u, q, cf, cr, dx, aux, (n_ticks * n_step) * dt, final)
-    for c in range(C_HAND, N_CHANNELS):
-        final[c] = math.nan
+    _final(x, u, q, cf, cr, dx, aux, n_ticks, dt, n_step, out[n_ticks])
     return DONE, n_ticks
 
 
@@ -307,6 +330,97 @@ def closed_loop_block(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore[no-
         ticks[b] = k
 
 
+def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
+                      n_ticks, drv, law_kind, law_flat, law_start, min_speed, angle_limit,
+                      max_step, out, codes, ticks):
+    """:func:`closed_loop_block` (same arguments and results) with the integration of
+    :data:`fourws_sim.lanes.LANES` points at a time in vector instructions
+    (``rk4_lanes`` of the tire's kernel module): each control tick answers every point with
+    the scalar code of :func:`closed_loop` (``_answer``), then one control period of RK4 runs
+    for all of them at once. A point gets exactly its :func:`closed_loop` numbers (the lane
+    right-hand side is the scalar one's operations, branch-free; ``test_study.py``).
+    Only for a tire with lane kernels (``_LANES`` not None)."""
+    n_points = x.shape[0]
+    n_x = N_STATE * LANES
+    IN = np.zeros(_LANES.N_IN * LANES)
+    OUT = np.zeros(_LANES.N_OUT * LANES)
+    X = np.zeros(n_x)
+    K = np.zeros((4, n_x))
+    XT = np.zeros(n_x)
+    RATE = np.zeros(LANES)
+    stepping = np.zeros(LANES, dtype=np.int64)
+    running = np.zeros(LANES, dtype=np.int64)
+    xl = np.zeros((LANES, N_STATE))
+    ul = np.zeros((LANES, N_INPUT))
+    carry = np.zeros((LANES, 3))
+    dx = np.zeros(N_STATE)
+    aux = np.zeros(N_AUX)
+    k_gain = np.zeros(5)
+    drive = np.zeros(4)
+    brake = np.zeros(4)
+    xs = np.zeros(N_STATE)
+    us = np.zeros(N_INPUT)
+    qs = np.zeros(q.shape[1])
+    cfs = np.zeros(cf.shape[1])
+    crs = np.zeros(cr.shape[1])
+    work = np.zeros((6, N_STATE))
+    aux_s = np.zeros(N_AUX)
+    for g0 in range(0, n_points, LANES):
+        n_lanes = min(LANES, n_points - g0)
+        most = 0
+        for j in range(LANES):
+            b = g0 + min(j, n_lanes - 1)  # idle lanes integrate a copy of the last point
+            for i in range(N_INPUT):
+                ul[j, i] = 0.0
+            for i in range(3):
+                carry[j, i] = 0.0
+            _LANES.pack_lane(IN, j, x[b], ul[j], q[b], cf[b], cr[b])
+            for i in range(N_STATE):
+                X[i * LANES + j] = x[b, i]
+            running[j] = 1 if j < n_lanes else 0
+            if j < n_lanes and n_ticks[b] > most:
+                most = n_ticks[b]
+        for k in range(most + 1):
+            for j in range(n_lanes):
+                if running[j] == 0:
+                    continue
+                b = g0 + j
+                xj = xl[j]
+                for i in range(N_STATE):
+                    xj[i] = X[i * LANES + j]
+                n = n_ticks[b]
+                if k == n:
+                    _final(xj, ul[j], q[b], cf[b], cr[b], dx, aux, n, dt, n_step, out[b, n])
+                    codes[b] = DONE
+                    ticks[b] = n
+                    running[j] = 0
+                    continue
+                code = _answer(xj, ul[j], q[b], cf[b], cr[b], dx, aux, k, dt, n_step,
+                               out[b, k], hand[b, k], front[b, k], drv[b], law_kind[b],
+                               law_flat[law_start[b]:law_start[b + 1]], min_speed[b],
+                               angle_limit[b], max_step[b], carry[j], drive, brake, k_gain)
+                if code != DONE:
+                    codes[b] = code
+                    ticks[b] = k
+                    running[j] = 0
+                    continue
+                for i in range(N_INPUT):
+                    IN[(_LANES.R_U + i) * LANES + j] = ul[j, i]
+            n_running = 0
+            for j in range(LANES):
+                stepping[j] = running[j]
+                n_running += running[j]
+            if n_running == 0:
+                break
+            _LANES.rk4_lanes(X, IN, OUT, K, XT, RATE, stepping, dt, n_step, xs, us, qs, cfs,
+                             crs, work, aux_s)
+            for j in range(n_lanes):
+                if running[j] != 0 and stepping[j] == 0:  # a state became non-finite
+                    codes[g0 + j] = DIVERGED
+                    ticks[g0 + j] = k + 1
+                    running[j] = 0
+
+
 # ------------------------------------------------------------------------------ compiling
 
 def _source_digest() -> str:
@@ -320,7 +434,7 @@ def _source_digest() -> str:
     for module in (fourws_control.base, fourws_control.ff_zero_sideslip, fourws_control.fws,
                    fourws_control.lqr, fourws_control.rwc_3dof, fourws_control.sol1,
                    fourws_control.sol2, fourws_sim.drivers, eightdof, eightdof_kernels,
-                   get_tire(TIRE_NAME)):
+                   fourws_sim.trig, fourws_sim.lanes, get_tire(TIRE_NAME)):
         digest.update(Path(module.__file__).read_bytes())  # type: ignore[arg-type]
     return digest.hexdigest()[:12]
 
@@ -343,5 +457,11 @@ def _jit(func: Any) -> Any:
 
 _gains = numba.njit(inline="always", **JIT_OPTIONS)(_gains)
 _outputs = numba.njit(inline="always", **JIT_OPTIONS)(_outputs)
+_answer = numba.njit(inline="always", **JIT_OPTIONS)(_answer)
+_final = numba.njit(inline="always", **JIT_OPTIONS)(_final)
 closed_loop = _jit(closed_loop)
 closed_loop_block = _jit(closed_loop_block)
+#: The batch kernel in vector instructions, where the tire has lane kernels.
+HAS_LANES = _LANES is not None
+if HAS_LANES:
+    closed_loop_lanes = _jit(closed_loop_lanes)

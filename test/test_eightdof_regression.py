@@ -282,3 +282,137 @@ def test_vector_fast_path_checks_like_the_general_path() -> None:
     eps_f = eightdof.params_for(sim.vehicle).arr[eightdof.PARAM.EPS_F]  # roll steer
     assert mine["front_wheel_angle_rad"] == pytest.approx(0.02 + eps_f * sim.state[STATE.PHI],
                                                           rel=1e-12)
+
+
+def _lane_module():  # type: ignore[no-untyped-def]
+    module = eightdof.lane_kernels_for("sti")
+    assert module is not None and module.HAS_LANES
+    return module
+
+
+def test_sti_lane_function_equals_forces_bit_for_bit() -> None:
+    """``forces_lane`` (branch-free, for the batch kernel) gives ``forces``'s numbers bit for
+    bit (compiled: it divides by zero where ``forces`` takes another branch, which plain
+    Python refuses), over loads, slip angles and slip ratios that take
+    every branch of ``forces``: no load, negative load, no friction, no slip (g = 0), pure
+    side slip (one pass), combined slip (two passes), sliding beyond the saturation's vertex
+    (sigma > 1), a locked and a spinning wheel; front and rear coefficients differ."""
+    import numba
+
+    from fourws_sim.lanes import LANES
+    from fourws_sim.tires import sti
+
+    cf = sti.pack_mapping({})
+    cr = sti.pack_mapping({"fzt_lb": 900.0, "ka": 0.2, "kmu": 0.3})
+    rng = np.random.default_rng(11)
+    rows = [(0.0, 0.1, 0.0, 1.0), (-50.0, 0.1, 0.0, 1.0), (3000.0, 0.1, 0.0, 0.0),
+            (3000.0, 0.0, 0.0, 1.0), (3000.0, 0.05, 0.0, 1.0), (3000.0, 0.05, -0.1, 1.0),
+            (3000.0, 1.2, 0.0, 0.6), (3000.0, 0.02, -1.0, 1.0), (3000.0, 0.02, 4.0, 1.0)]
+    rows += [(rng.uniform(-500.0, 9000.0), rng.uniform(-1.6, 1.6),
+              rng.choice([0.0, rng.uniform(-1.0, 1.0), rng.uniform(-3.0, 3.0)]),
+              rng.choice([0.0, 0.5, 1.0])) for _ in range(400)]
+    flat = np.zeros(2 * sti.N_COEFFS * LANES)
+    for k in range(sti.N_COEFFS):
+        flat[k * LANES:(k + 1) * LANES] = cf[k]
+        flat[(sti.N_COEFFS + k) * LANES:(sti.N_COEFFS + k + 1) * LANES] = cr[k]
+    lane = numba.njit(error_model="numpy")(
+        lambda fz, al, ka, mu, c, base, ln: sti.forces_lane(fz, al, ka, mu, c, base, ln))
+    for i, (fz, alpha, kappa, mu) in enumerate(rows):
+        for base, coeffs in ((0, cf), (sti.N_COEFFS, cr)):
+            want = np.array(sti.forces(fz, alpha, kappa, 20.0, mu, coeffs))
+            got = np.array(lane(fz, alpha, kappa, mu, flat, base, i % LANES))
+            assert got.tobytes() == want.tobytes(), (fz, alpha, kappa, mu, got - want)
+
+
+def _lanes_case(module, rng):  # type: ignore[no-untyped-def]
+    """A lane array of states of the kinds a study meets: straight running at several speeds,
+    perturbed states with drive and brake torques, a held wheel, an unloaded wheel, a slowly
+    rolling scale car (its light wheels need sub-steps), and one non-finite state. Returns
+    each lane's parameters, the lane array, states and inputs."""
+    from fourws_sim.lanes import LANES
+
+    car = eightdof.params_for(load_vehicle("table_8_1"), "sti")
+    scale_car = eightdof.params_for(load_vehicle("f1tenth"), "sti")
+    IN = np.zeros(module.N_IN * LANES)
+    params, states, inputs = [], [], []
+    for ln in range(LANES):
+        p = scale_car if ln == 3 else car
+        x = eightdof.initial_state(p, 8.0 + 3.0 * ln)
+        x = x + rng.normal(0.0, 0.02, x.size) * np.maximum(np.abs(x), 0.1)
+        u = np.zeros(eightdof.N_INPUT)
+        u[INPUT.DELTA_F] = rng.normal(0.0, 0.05)
+        u[INPUT.DELTA_R] = rng.normal(0.0, 0.01)
+        u[INPUT.DRIVE_FL] = rng.uniform(0.0, 300.0)
+        u[INPUT.BRAKE_RL] = rng.uniform(0.0, 300.0)
+        if ln == 1:
+            x[STATE.OMEGA_FL] = 0.0  # a held wheel
+        if ln == 2:
+            x[STATE.AY_LT] = 60.0  # the inner wheels lift off
+        if ln == 3:
+            x = eightdof.initial_state(p, 0.3)  # light wheels rolling slowly: sub-steps
+        if ln == 4:
+            x[STATE.V] = np.nan
+        module.pack_lane(IN, ln, x, u, p.arr, p.coeffs_front, p.coeffs_rear)
+        params.append(p)
+        states.append(x)
+        inputs.append(u)
+    return params, IN, states, inputs
+
+
+def test_lane_right_hand_side_equals_the_scalar_one_bit_for_bit() -> None:
+    """``rhs_lanes`` (the vectorized right-hand side of the study's batch kernel) gives each
+    lane exactly ``rhs``'s derivatives and slip rate."""
+    from fourws_sim.lanes import LANES
+
+    module = _lane_module()
+    kernels = eightdof.kernels_for("sti")
+    params, IN, states, inputs = _lanes_case(module, np.random.default_rng(5))
+    OUT = np.zeros(module.N_OUT * LANES)
+    module.rhs_lanes(IN, OUT)
+    for ln in range(LANES):
+        dx = np.zeros(eightdof.N_STATE)
+        aux = np.zeros(eightdof.N_AUX)
+        p = params[ln]
+        kernels.rhs(states[ln], inputs[ln], p.arr, p.coeffs_front, p.coeffs_rear, dx, aux)
+        got = OUT[ln:eightdof.N_STATE * LANES:LANES]
+        assert got.tobytes() == dx.tobytes(), ln
+        rate = OUT[module.R_RATE * LANES + ln]
+        assert rate == aux[eightdof._AUX_RATE] or (np.isnan(rate) and ln == 4)
+
+
+def test_lane_rk4_equals_the_scalar_rk4_bit_for_bit() -> None:
+    """``rk4_lanes`` advances each lane exactly as ``rk4`` advances its state, through a step
+    taken in sub-steps (the slow lane) and with a lane whose state is not finite (it stops,
+    its state stays as it was, the others go on)."""
+    from fourws_sim.lanes import LANES
+
+    module = _lane_module()
+    kernels = eightdof.kernels_for("sti")
+    params, IN, states, inputs = _lanes_case(module, np.random.default_rng(6))
+    p = params[0]
+    X = np.zeros(eightdof.N_STATE * LANES)
+    for ln in range(LANES):
+        X[ln::LANES] = states[ln]
+    active = np.ones(LANES, dtype=np.int64)
+    work = np.zeros((6, eightdof.N_STATE))
+    n_steps = 25
+    left = module.rk4_lanes(
+        X, IN, np.zeros(module.N_OUT * LANES), np.zeros((4, eightdof.N_STATE * LANES)),
+        np.zeros(eightdof.N_STATE * LANES), np.zeros(LANES), active, 1e-3, n_steps,
+        np.zeros(eightdof.N_STATE), np.zeros(eightdof.N_INPUT), np.zeros(p.arr.size),
+        np.zeros(p.coeffs_front.size), np.zeros(p.coeffs_rear.size), work,
+        np.zeros(eightdof.N_AUX))
+    assert left == LANES - 1 and active[4] == 0
+    for ln in range(LANES):
+        x = states[ln].copy()
+        p = params[ln]
+        done = kernels.rk4(x, inputs[ln], p.arr, p.coeffs_front, p.coeffs_rear, 1e-3, n_steps)
+        assert done == (0 if ln == 4 else n_steps)
+        got = X[ln::LANES]
+        assert got.tobytes() == x.tobytes() or (ln == 4 and np.isnan(got[STATE.V])), ln
+    # the slow lane's steps did go through sub-steps (the scalar path the lanes hand over to)
+    dx = np.zeros(eightdof.N_STATE)
+    aux = np.zeros(eightdof.N_AUX)
+    p = params[3]
+    kernels.rhs(states[3], inputs[3], p.arr, p.coeffs_front, p.coeffs_rear, dx, aux)
+    assert eightdof.substeps(aux[eightdof._AUX_RATE], 1e-3, "rk4") > 1

@@ -113,7 +113,9 @@ def test_batch_kernel_equals_the_single_run_kernel_bit_for_bit(tmp_path):
     """One call of the batch kernel over a block mixing laws with gain functions of different
     parameter counts (closed form, 3-DOF fit, LQR table), speeds, a spinning point and two
     maneuvers of different lengths gives each point the arrays of its own single-run call to
-    the last bit (the block pads steering and output rows; a point must read only its own)."""
+    the last bit (the block pads steering and output rows; a point must read only its own;
+    the vectorized integration of many points at once performs each point's scalar
+    operations)."""
     preps, singles = [], []
     for maneuver, speeds in ((STEP, [60.0, 130.0]), (SINE, [90.0])):
         study = _study(tmp_path, f"block_{maneuver['type']}", scenario=_scenario(maneuver),
@@ -127,6 +129,9 @@ def test_batch_kernel_equals_the_single_run_kernel_bit_for_bit(tmp_path):
             preps.append(prep)
             singles.append(run_compiled(config, law))
     assert len({p.front.size for p in preps}) == 2  # blocks of unequal runs
+    # the STI tire of table_8_1 has lane kernels: the block runs in vector instructions
+    # (closed_loop_lanes, 16 points at a time, here one full group and one of 4 lanes)
+    assert all(p.lanes for p in preps)
     batch = run_compiled_block(preps)
     assert len(batch) == len(singles) == 12
     for got, want in zip(batch, singles):

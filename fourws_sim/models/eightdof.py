@@ -833,6 +833,7 @@ class Kernels(NamedTuple):
     euler: Callable[..., Any]
 
 
+_KERNEL_MODULES: dict[str, Any] = {}
 _KERNEL_CACHE: dict[str, Kernels] = {}
 #: The kernel source, loaded by file (it imports this module's slots: never the reverse).
 _KERNELS_MODULE = f"{__package__}.eightdof_kernels"
@@ -867,7 +868,23 @@ def kernels_for(tire_name: str) -> Kernels:
             sys.modules[name] = module
             spec.loader.exec_module(module)
         _KERNEL_CACHE[tire_name] = Kernels(module.rhs, module.rk4, module.euler)
+        _KERNEL_MODULES[tire_name] = module
     return _KERNEL_CACHE[tire_name]
+
+
+def lane_kernels_for(tire_name: str) -> Any:
+    """The kernel module of tire model ``tire_name`` if it has the batch kernels of many
+    points at once (``rhs_lanes``, ``rk4_lanes``, ``pack_lane``; a tire with ``forces_lane``,
+    :mod:`fourws_sim.lanes`), else None.
+
+    Raises
+    ------
+    UnknownNameError
+        If ``tire_name`` is not a known tire model.
+    """
+    kernels_for(tire_name)
+    module = _KERNEL_MODULES[tire_name]
+    return module if module.HAS_LANES else None
 
 
 def aux_from_array(aux: np.ndarray) -> Aux:

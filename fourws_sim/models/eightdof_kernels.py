@@ -43,7 +43,10 @@ from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA
                                         HELD_SPIN_FLOOR_RADPS, INPUT, MAX_SUBSTEPS, N_AUX,
                                         N_INPUT, N_STATE, PARAM, RK4_RATE_BOUND, STATE)
 from fourws_sim.models import eightdof
+from fourws_sim import lanes, trig
 from fourws_sim.tires import get_tire
+from fourws_sim.lanes import LANES
+from fourws_sim.trig import atan, sincos
 
 #: Tire model of this variant (set by ``kernels_for`` before the module body runs).
 TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
@@ -66,7 +69,7 @@ def _source_digest() -> str:
     digest = hashlib.sha1()
     digest.update(Path(__file__).read_bytes())
     digest.update(repr(sorted(JIT_OPTIONS.items())).encode())
-    for module in (eightdof, _TIRE_MODULE):
+    for module in (eightdof, trig, lanes, _TIRE_MODULE):
         digest.update(Path(module.__file__).read_bytes())  # type: ignore[arg-type]
     return digest.hexdigest()[:12]
 
@@ -233,10 +236,8 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
                * pt[_P_INV_TR])
     st_f = pt[_P_STF]
     st_r = pt[_P_STR]
-    cdf = math.cos(delta_f)
-    sdf = math.sin(delta_f)
-    cdr = math.cos(delta_r)
-    sdr = math.sin(delta_r)
+    sdf, cdf = sincos(delta_f)
+    sdr, cdr = sincos(delta_r)
     sum_fx = 0.0
     sum_fy = 0.0
     sum_n = 0.0
@@ -275,7 +276,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         avx = abs(vx)
         den = avx if avx > vmin else vmin
         inv_den = 1.0 / den  # den >= v_min > 0
-        alpha = math.atan(vy * inv_den)  # atan2(vy, den) without the quadrant logic
+        alpha = atan(vy * inv_den)  # atan2(vy, den) without the quadrant logic
         kappa = (x[i_w0 + i] * rw - vx) * inv_den
         if inv_sigma > 0.0:
             al_lag = x[i_al0 + i]
@@ -377,8 +378,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     else:
         dx[i_ds] = 0.0
         dx[i_dsr] = 0.0
-    c = math.cos(phi)
-    s = math.sin(phi)
+    s, c = sincos(phi)
     msh = pt[_P_MSH]
     mshc = msh * c
     ixz = q[k_ixz]
@@ -398,8 +398,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     dx[i_r] = rd
     dx[i_phi] = pr
     dx[i_p] = pd
-    cps = math.cos(psi)
-    sps = math.sin(psi)
+    sps, cps = sincos(psi)
     dx[i_x] = U * cps - V * sps
     dx[i_y] = U * sps + V * cps
     dx[i_psi] = r
@@ -615,3 +614,291 @@ _rk4_substeps_called = _jit(_rk4_substeps)
 _euler_substeps_called = _jit(_euler_substeps)
 rk4 = _jit(rk4)
 euler = _jit(euler)
+
+
+# ------------------------------------------------------------------------------ lanes
+# The study's batch kernel advances LANES points ("lanes") at once (:mod:`fourws_sim.lanes`:
+# quantity ``row`` of lane ``l`` is element ``row * LANES + l`` of a flat array), in loops
+# over lanes whose body has no branch and no call, so the compiler turns them into vector
+# instructions. The body is ``_rhs_terms`` with every ``if`` written as a choice between
+# computed values under the same test, so a lane computes exactly the scalar code's numbers
+# (``test_eightdof_regression``). It covers the fixed-control 8-DOF (no free steering system)
+# with a tire that has ``forces_lane``.
+
+#: The tire's branch-free lane function, if it has one (else the batch kernel calls the
+#: scalar kernel point by point).
+HAS_LANES = hasattr(_TIRE_MODULE, "forces_lane")
+#: Rows of the parameter terms (``_parameter_terms`` as a column).
+N_PT = _P_INV_SIGMA_R + 1
+N_COEF = int(getattr(_TIRE_MODULE, "N_COEFFS", 0))
+#: Rows of the lanes' input array: state, input, parameters, parameter terms, front and
+#: rear tire coefficients.
+R_X = 0
+R_U = R_X + N_STATE
+R_Q = R_U + N_INPUT
+R_PT = R_Q + len(PARAM)
+R_CF = R_PT + N_PT
+R_CR = R_CF + N_COEF
+N_IN = R_CR + N_COEF
+#: Rows of the lanes' output array: dx/dt and the fastest slip rate.
+R_DX = 0
+R_RATE = N_STATE
+N_OUT = R_RATE + 1
+
+
+def _lanes_unavailable(*args):  # type: ignore[no-untyped-def]
+    return 0.0, 0.0, 0.0
+
+
+_forces_lane = _jit_inline(getattr(_TIRE_MODULE, "forces_lane", _lanes_unavailable))
+
+
+def _lane_wheel(IN, OUT, cbase, ln, i, xw, cd, sd, fz, yw, inv_sigma,  # type: ignore
+                U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate):
+    """Wheel ``i`` of lane ``ln`` in ``_rhs_lanes`` (``_rhs_terms``' two loops for one wheel:
+    kinematics, tire lag, tire, spin equation); writes its slip-lag and spin derivatives and
+    returns ``(fxb, fyb, moment about the CG, rate)``."""
+    fz = 0.0 if fz < 0.0 else fz
+    vxb = U_ - r * yw
+    vyb = V + r * xw
+    vx = vxb * cd + vyb * sd
+    vy = -vxb * sd + vyb * cd
+    avx = abs(vx)
+    den = avx if avx > vmin else vmin
+    inv_den = 1.0 / den
+    alpha = atan(vy * inv_den)
+    om = IN[(R_X + i_w0 + i) * LANES + ln]
+    kappa = (om * rw - vx) * inv_den
+    lagged = inv_sigma > 0.0
+    al_lag = IN[(R_X + i_al0 + i) * LANES + ln]
+    lag_rate = den * inv_sigma
+    OUT[(R_DX + i_al0 + i) * LANES + ln] = lag_rate * (alpha - al_lag) if lagged else 0.0
+    alpha_t = al_lag if lagged else alpha
+    rate = lag_rate if (lagged and lag_rate > rate) else rate
+    spin_rate = k_spin * inv_den
+    rate = spin_rate if spin_rate > rate else rate
+    fx, fy, mz = _forces_lane(fz, alpha_t, kappa, mu, IN, cbase, ln)
+    fxb = fx * cd - fy * sd
+    fyb = fx * sd + fy * cd
+    moment = xw * fyb - yw * fxb + mz
+    brake = IN[(R_U + j_b0 + i) * LANES + ln]
+    brake = 0.0 if brake < 0.0 else brake
+    cap = brake + frr * fz * rw
+    t_other = IN[(R_U + j_d0 + i) * LANES + ln] - rw * fx
+    sliding = iw * abs(om) >= cap * tb
+    t_slide = (t_other - cap if om > 0.0 else
+               (t_other + cap if om < 0.0 else t_other))
+    held = -om / tb * (1.0 - abs(t_other) / cap)
+    OUT[(R_DX + i_w0 + i) * LANES + ln] = (
+        t_slide * inv_iw if sliding else
+        ((t_other - cap) * inv_iw if t_other > cap else
+         ((t_other + cap) * inv_iw if t_other < -cap else
+          (held if abs(om) > HELD_FLOOR else 0.0))))
+    return fxb, fyb, moment, rate
+
+
+_lane_wheel = _jit_inline(_lane_wheel)
+
+
+def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
+    """``_rhs_terms`` of the LANES lanes of ``IN`` (rows ``R_*``) into ``OUT`` (dx/dt and the
+    fastest slip rate). Lanes have the steering system off."""
+    for ln in range(LANES):
+        U_ = IN[(R_X + i_u) * LANES + ln]
+        V = IN[(R_X + i_v) * LANES + ln]
+        r = IN[(R_X + i_r) * LANES + ln]
+        phi = IN[(R_X + i_phi) * LANES + ln]
+        pr = IN[(R_X + i_p) * LANES + ln]
+        psi = IN[(R_X + i_psi) * LANES + ln]
+        ax_lt = IN[(R_X + i_ax) * LANES + ln]
+        ay_lt = IN[(R_X + i_ay) * LANES + ln]
+        m = IN[(R_Q + k_m) * LANES + ln]
+        a = IN[(R_Q + k_a) * LANES + ln]
+        b = IN[(R_Q + k_b) * LANES + ln]
+        tf = IN[(R_Q + k_tf) * LANES + ln]
+        tr = IN[(R_Q + k_tr) * LANES + ln]
+        rw = IN[(R_Q + k_rw) * LANES + ln]
+        iw = IN[(R_Q + k_iw) * LANES + ln]
+        vmin = IN[(R_Q + k_vmin) * LANES + ln]
+        k_spin = IN[(R_Q + k_kspin) * LANES + ln]
+        mu = IN[(R_Q + k_mu) * LANES + ln]
+        tb = IN[(R_Q + k_tb) * LANES + ln]
+        frr = IN[(R_Q + k_frr) * LANES + ln]
+        ixz = IN[(R_Q + k_ixz) * LANES + ln]
+        ix = IN[(R_Q + k_ix) * LANES + ln]
+        inv_iw = IN[(R_PT + _P_INV_IW) * LANES + ln]
+        delta_f = IN[(R_U + j_df) * LANES + ln] + IN[(R_Q + k_ef) * LANES + ln] * phi
+        delta_r = IN[(R_U + j_dr) * LANES + ln] + IN[(R_Q + k_er) * LANES + ln] * phi
+        d_long = (IN[(R_PT + _P_HALF_M) * LANES + ln] * ax_lt * IN[(R_Q + k_hcg) * LANES + ln]
+                  * IN[(R_PT + _P_INV_L) * LANES + ln])
+        d_lat_f = ((IN[(R_Q + k_kf) * LANES + ln] * phi + IN[(R_Q + k_cf) * LANES + ln] * pr
+                    + IN[(R_PT + _P_RCF) * LANES + ln] * ay_lt
+                    + IN[(R_PT + _P_HUF) * LANES + ln] * ay_lt)
+                   * IN[(R_PT + _P_INV_TF) * LANES + ln])
+        d_lat_r = ((IN[(R_Q + k_kr) * LANES + ln] * phi + IN[(R_Q + k_cr) * LANES + ln] * pr
+                    + IN[(R_PT + _P_RCR) * LANES + ln] * ay_lt
+                    + IN[(R_PT + _P_HUR) * LANES + ln] * ay_lt)
+                   * IN[(R_PT + _P_INV_TR) * LANES + ln])
+        st_f = IN[(R_PT + _P_STF) * LANES + ln]
+        st_r = IN[(R_PT + _P_STR) * LANES + ln]
+        sdf, cdf = sincos(delta_f)
+        sdr, cdr = sincos(delta_r)
+        sig_f = IN[(R_PT + _P_INV_SIGMA_F) * LANES + ln]
+        sig_r = IN[(R_PT + _P_INV_SIGMA_R) * LANES + ln]
+        ywf = 0.5 * tf
+        ywr = 0.5 * tr
+        # the four wheels in order (FL, FR, RL, RR), summed in wheel order as _rhs_terms
+        fxb, fyb, mom, rate = _lane_wheel(
+            IN, OUT, R_CF, ln, 0, a, cdf, sdf, (st_f - d_long) - d_lat_f, ywf, sig_f,
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, 0.0)
+        sum_fx = 0.0 + fxb
+        sum_fy = 0.0 + fyb
+        sum_n = 0.0 + mom
+        fxb, fyb, mom, rate = _lane_wheel(
+            IN, OUT, R_CF, ln, 1, a, cdf, sdf, (st_f - d_long) + d_lat_f, -ywf, sig_f,
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
+        sum_fx += fxb
+        sum_fy += fyb
+        sum_n += mom
+        fxb, fyb, mom, rate = _lane_wheel(
+            IN, OUT, R_CR, ln, 2, -b, cdr, sdr, (st_r + d_long) - d_lat_r, ywr, sig_r,
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
+        sum_fx += fxb
+        sum_fy += fyb
+        sum_n += mom
+        fxb, fyb, mom, rate = _lane_wheel(
+            IN, OUT, R_CR, ln, 3, -b, cdr, sdr, (st_r + d_long) + d_lat_r, -ywr, sig_r,
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
+        sum_fx += fxb
+        sum_fy += fyb
+        sum_n += mom
+        OUT[(R_DX + i_ds) * LANES + ln] = 0.0
+        OUT[(R_DX + i_dsr) * LANES + ln] = 0.0
+        s, c = sincos(phi)
+        msh = IN[(R_PT + _P_MSH) * LANES + ln]
+        mshc = msh * c
+        rhs_y = sum_fy - m * U_ * r - msh * s * (pr * pr + r * r)
+        rhs_l = (mshc * U_ * r + IN[(R_PT + _P_MSHG) * LANES + ln] * s
+                 - IN[(R_PT + _P_KPHI) * LANES + ln] * phi
+                 - IN[(R_PT + _P_CPHI) * LANES + ln] * pr)
+        inv_m = IN[(R_PT + _P_INV_M) * LANES + ln]
+        inv_iz = IN[(R_PT + _P_INV_IZ) * LANES + ln]
+        det = ix - mshc * mshc * inv_m - IN[(R_PT + _P_IXZ2) * LANES + ln]
+        pd = (rhs_l + mshc * rhs_y * inv_m + ixz * sum_n * inv_iz) / det
+        vd = (rhs_y + mshc * pd) * inv_m
+        rd = (sum_n + ixz * pd) * inv_iz
+        ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
+        ax = ud - V * r
+        ay = vd + U_ * r
+        OUT[(R_DX + i_u) * LANES + ln] = ud
+        OUT[(R_DX + i_v) * LANES + ln] = vd
+        OUT[(R_DX + i_r) * LANES + ln] = rd
+        OUT[(R_DX + i_phi) * LANES + ln] = pr
+        OUT[(R_DX + i_p) * LANES + ln] = pd
+        sps, cps = sincos(psi)
+        OUT[(R_DX + i_x) * LANES + ln] = U_ * cps - V * sps
+        OUT[(R_DX + i_y) * LANES + ln] = U_ * sps + V * cps
+        OUT[(R_DX + i_psi) * LANES + ln] = r
+        inv_tlt = IN[(R_PT + _P_INV_TLT) * LANES + ln]
+        OUT[(R_DX + i_ax) * LANES + ln] = (ax - ax_lt) * inv_tlt
+        OUT[(R_DX + i_ay) * LANES + ln] = (ay - ay_lt) * inv_tlt
+        OUT[R_RATE * LANES + ln] = rate
+
+
+#: One compiled copy, called (the loop over lanes inside makes the call's cost nothing).
+rhs_lanes = _jit(_rhs_lanes)
+
+
+def pack_lane(IN, ln, x, u, q, cf, cr):  # type: ignore[no-untyped-def]
+    """Put one point's state, input, parameters (and their terms) and tire coefficients
+    into lane ``l`` of ``IN``."""
+    for j in range(N_STATE):
+        IN[(R_X + j) * LANES + ln] = x[j]
+    for j in range(N_INPUT):
+        IN[(R_U + j) * LANES + ln] = u[j]
+    for j in range(len(q)):
+        IN[(R_Q + j) * LANES + ln] = q[j]
+    terms = _parameter_terms_inline(q)
+    for j in range(N_PT):
+        IN[(R_PT + j) * LANES + ln] = terms[j]
+    for j in range(N_COEF):
+        IN[(R_CF + j) * LANES + ln] = cf[j]
+        IN[(R_CR + j) * LANES + ln] = cr[j]
+
+
+def rk4_lanes(X, IN, OUT, K, XT, RATE, active, dt, n_steps,  # type: ignore[no-untyped-def]
+              xs, us, qs, cfs, crs, work, aux):
+    """``n_steps`` RK4 steps of the active lanes (``active[ln] != 0``) of the states ``X``
+    (flat, rows ``0..N_STATE``), with the inputs, parameters and coefficients in ``IN``: each
+    lane gets exactly what ``rk4`` gives its state. A lane whose state needs sub-steps takes
+    that step through the scalar ``_rk4_substeps`` (its column copied to ``xs``, ``us``,
+    ``qs``, ``cfs``, ``crs``); a lane whose state becomes non-finite keeps its state at the
+    start of that step and gets ``active[ln] = 0``. ``OUT``: the right-hand side's output;
+    ``K``: (4, N_STATE * LANES) stage derivatives; ``XT``, ``RATE``: work (N_STATE * LANES),
+    (LANES,); ``work``, ``aux``: the scalar path's. Returns the lanes still active."""
+    n_x = N_STATE * LANES
+    half = 0.5 * dt
+    sixth = dt / 6.0
+    dt_over_bound = dt / RK4_BOUND
+    for _step in range(n_steps):
+        for stage in range(4):
+            if stage == 0:
+                for i in range(n_x):
+                    IN[i] = X[i]
+            else:
+                h = dt if stage == 3 else half
+                kp = K[stage - 1]
+                for i in range(n_x):
+                    IN[i] = X[i] + h * kp[i]
+            rhs_lanes(IN, OUT)
+            ks = K[stage]
+            for i in range(n_x):
+                ks[i] = OUT[i]
+            if stage == 0:
+                for ln in range(LANES):
+                    RATE[ln] = OUT[R_RATE * LANES + ln]
+        k1 = K[0]
+        k2 = K[1]
+        k3 = K[2]
+        k4 = K[3]
+        for i in range(n_x):
+            XT[i] = X[i] + sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        for ln in range(LANES):
+            if active[ln] == 0:
+                continue
+            n_sub = _substeps_inline(RATE[ln], dt_over_bound)
+            if n_sub > 1:
+                for j in range(N_STATE):
+                    xs[j] = X[j * LANES + ln]
+                for j in range(N_INPUT):
+                    us[j] = IN[(R_U + j) * LANES + ln]
+                for j in range(qs.size):
+                    qs[j] = IN[(R_Q + j) * LANES + ln]
+                for j in range(N_COEF):
+                    cfs[j] = IN[(R_CF + j) * LANES + ln]
+                    crs[j] = IN[(R_CR + j) * LANES + ln]
+                pt = _parameter_terms_inline(qs)
+                if _rk4_substeps_called(xs, us, qs, pt, cfs, crs, dt, n_sub, work, aux):
+                    for j in range(N_STATE):
+                        X[j * LANES + ln] = xs[j]
+                else:
+                    active[ln] = 0
+                continue
+            ok = True
+            for j in range(N_STATE):
+                if not math.isfinite(XT[j * LANES + ln]):
+                    ok = False
+            if ok:
+                for j in range(N_STATE):
+                    X[j * LANES + ln] = XT[j * LANES + ln]
+            else:
+                active[ln] = 0
+    count = 0
+    for ln in range(LANES):
+        if active[ln] != 0:
+            count += 1
+    return count
+
+
+pack_lane = _jit(pack_lane)
+rk4_lanes = _jit(rk4_lanes)

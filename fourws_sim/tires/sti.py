@@ -99,6 +99,8 @@ import numpy as np
 from numba.extending import register_jitable
 
 from fourws_sim.errors import ParameterError
+from fourws_sim.lanes import LANES
+from fourws_sim.trig import sincos
 
 #: Newtons per pound-force.
 N_PER_LBF = 4.4482216152605
@@ -217,8 +219,8 @@ def _prepare(fz_n: float, alpha_rad: float, kappa: float, mu: float,
     if not mu0 > 0.0:
         return _NO_FORCE
 
-    sa = math.sin(alpha_rad)
-    ca = abs(math.cos(alpha_rad))
+    sa, ca = sincos(alpha_rad)
+    ca = abs(ca)
     s = -kappa  # braking slip of the original model
     q = math.sqrt(sa * sa + s * s * ca * ca)
     if q > 1.0:
@@ -293,6 +295,115 @@ def _finish(p: tuple[bool, float, float, float, float, float, float, float], f: 
     trail_ft = coeffs[_G1] * _TRAIL_PER_LENGTH * p[2] * ratio * shape
     mz_ftlb = -trail_ft * fy_lb + coeffs[_K1] * fx_lb * fy_lb
     return fx_lb * N_PER_LBF, fy_lb * N_PER_LBF, mz_ftlb * N_PER_LBF * M_PER_FT
+
+
+@register_jitable(error_model="numpy", inline="always")
+def _lane_pass(h: float, den: float, ratio: float, kq: float, c1: float, c2: float,
+               c3: float, c4: float) -> tuple[float, float]:
+    """:func:`_pass` without branches (both forms of the saturation function computed, one
+    taken by the same tests): the same numbers where :func:`_pass` is defined."""
+    num = h * ratio * ratio
+    sg = num / den
+    sg2 = sg * sg
+    f_low = ((c1 * sg2 * sg + c2 * sg2 + _F_SLOPE * sg)
+             / (c1 * sg2 * sg + c3 * sg2 + c4 * sg + 1.0))
+    u = den / num
+    u2 = u * u
+    f_high = (c1 + c2 * u + _F_SLOPE * u2) / (c1 + c3 * u + c4 * u2 + u2 * u)
+    f = 0.0 if not num > 0.0 else (f_low if num <= den else f_high)
+    new_ratio = 1.0 - kq * f
+    new_ratio = 0.0 if new_ratio < 0.0 else new_ratio
+    return f, new_ratio
+
+
+@register_jitable(error_model="numpy", inline="always")
+def forces_lane(fz_n: float, alpha_rad: float, kappa: float, mu: float, c: np.ndarray,
+                base: int, lane: int) -> tuple[float, float, float]:
+    """:func:`forces` of one lane of the study's batch kernel, without branches, so that a
+    loop over lanes compiles to vector instructions (compiled code only: it divides by zero
+    where :func:`forces` takes another branch, which IEEE arithmetic allows and plain Python
+    does not); coefficient ``k`` of the lane is ``c[(base + k) * LANES + lane]``
+    (:mod:`fourws_sim.lanes`; :func:`pack` as a column). Gives :func:`forces`'s numbers bit
+    for bit (``test_eightdof_regression.py``) for ``G2 = 1`` (Table C.1; the batch kernel
+    takes no other: ``G2 != 1`` needs a power function, which does not vectorize).
+
+    Every phase is computed for every lane, with the tests of :func:`_prepare`,
+    :func:`_pass` and :func:`_finish` choosing among the results; a tire that gives no
+    force (no load, no friction, no slip) is zero at the end, as ``_NO_FORCE`` makes it."""
+    at = base * LANES + lane  # coefficient k of the lane: c[at + k * LANES]
+    k_a0 = c[at + _A0 * LANES]
+    k_a1 = c[at + _A1 * LANES]
+    k_a2 = c[at + _A2 * LANES]
+    k_b1 = c[at + _B1 * LANES]
+    k_b3 = c[at + _B3 * LANES]
+    k_b4 = c[at + _B4 * LANES]
+    k_c1 = c[at + _C1 * LANES]
+    k_c2 = c[at + _C2 * LANES]
+    k_c3 = c[at + _C3 * LANES]
+    k_c4 = c[at + _C4 * LANES]
+    k_csfz = c[at + _CSFZ * LANES]
+    k_fzt = c[at + _FZT * LANES]
+    k_g1 = c[at + _G1 * LANES]
+    k_k1 = c[at + _K1 * LANES]
+    k_ka = c[at + _KA * LANES]
+    k_kmu = c[at + _KMU * LANES]
+    k_tp = c[at + _TP * LANES]
+    k_tw = c[at + _TW * LANES]
+    fz = fz_n * _LBF_PER_N
+    ap0 = (_AP_CONSTANT * math.sqrt(fz * k_fzt)
+           / (k_tw * (k_tp + _AP_PRESSURE_OFFSET_PSI)))
+    a1 = k_a1
+    a2 = k_a2
+    fz_c = fz if fz < 0.5 * a2 else 0.5 * a2
+    c_a = k_a0 + a1 * fz_c - a1 / a2 * fz_c * fz_c
+    c_a = 0.0 if c_a < 0.0 else c_a
+    c_s = k_csfz * fz
+    mu0 = mu * (k_b1 * fz + k_b3 + k_b4 * fz * fz)
+    sa, ca = sincos(alpha_rad)
+    ca = abs(ca)
+    s = -kappa
+    q = math.sqrt(sa * sa + s * s * ca * ca)
+    q = 1.0 if q > 1.0 else q
+    c_s_slide = c_s + (c_a - c_s) * q
+    mu_slide = mu0 * (1.0 - k_kmu * q)
+    mu_slide = 0.0 if mu_slide < 0.0 else mu_slide
+    gy = c_a * sa
+    gx = c_s_slide * s * ca
+    g = math.sqrt(gy * gy + gx * gx)
+    valid = fz_n > 0.0 and mu > 0.0 and mu0 > 0.0 and g > 0.0
+    hx = c_s * s * ca
+    h = 0.25 * math.pi * math.sqrt(gy * gy + hx * hx)
+    den = mu0 * fz * ca
+    ig = mu_slide / g
+    ux = ig * gx
+    uy = ig * gy
+    kq = k_ka * abs(ux)
+    c1 = k_c1
+    c2 = k_c2
+    c3 = k_c3
+    c4 = k_c4
+    # forces(): pass 0 at a_p = a_p0, pass 1 with its Fx unless the ratio stayed 1
+    f0, ratio1 = _lane_pass(h, den, 1.0, kq, c1, c2, c3, c4)
+    f1, ratio2 = _lane_pass(h, den, ratio1, kq, c1, c2, c3, c4)
+    again = ratio1 != 1.0
+    f = f1 if again else f0
+    ratio = ratio2 if again else 1.0
+    # _finish() with G2 = 1
+    fzf = fz * f
+    fx_lb = -fzf * ux
+    fy_lb = -fzf * uy
+    decay = 1.0 - f
+    decay = 0.0 if decay < 0.0 else decay
+    trail_ft = k_g1 * _TRAIL_PER_LENGTH * ap0 * ratio * decay
+    mz_ftlb = -trail_ft * fy_lb + k_k1 * fx_lb * fy_lb
+    fx = fx_lb * N_PER_LBF if valid else 0.0
+    fy = fy_lb * N_PER_LBF if valid else 0.0
+    mz = mz_ftlb * N_PER_LBF * M_PER_FT if valid else 0.0
+    return fx, fy, mz
+
+
+#: Which coefficient must hold for :func:`forces_lane` (and its value): ``G2 = 1``.
+LANE_CONDITION = (int(COEF.G2), 1.0)
 
 
 def forces(fz_n: float, alpha_rad: float, kappa: float, vx_mps: float, mu: float,
