@@ -490,13 +490,21 @@ class Vehicle:
             - c.cg_to_front_axle_m / t.cornering_stiffness_rear_n_per_rad)
 
     def with_axle_tires(self, scale_front: float, scale_rear: float | None = None) -> "Vehicle":
-        """Copy with cornering stiffnesses scaled (e.g. a controller's ±40 % belief)."""
+        """Copy with cornering stiffnesses scaled (e.g. a controller's ±40 % belief); the
+        same copy for the same scales (kept per instance: the vehicle is frozen)."""
         s_r = scale_front if scale_rear is None else scale_rear
+        scaled = self.__dict__.setdefault("_scaled", {})
+        key = (float(scale_front), float(s_r))
+        if key in scaled:
+            return scaled[key]
         t = self.axle_tires
         new = AxleTires(t.cornering_stiffness_front_n_per_rad * scale_front,
                         t.cornering_stiffness_rear_n_per_rad * s_r)
         _validate_dataclass(new, self.source, "axle_tires.", self.unchecked_fields)
-        return dataclasses.replace(self, axle_tires=new)
+        if len(scaled) >= 64:
+            scaled.pop(next(iter(scaled)))
+        scaled[key] = dataclasses.replace(self, axle_tires=new)
+        return scaled[key]
 
     def cache_key(self) -> str:
         """The vehicle as canonical JSON (its :meth:`to_dict`, keys sorted): equal for equal
@@ -532,41 +540,20 @@ class Vehicle:
 #: Vehicles built by :func:`vehicle_from_mapping`, by the frozen form of their mapping and
 #: source (a study builds the same vehicle for many points; the analysis of a run builds its
 #: vehicle and belief from the run configuration).
-_BUILT: dict[tuple[Any, str], Vehicle] = {}
+_BUILT: dict[tuple[str, str], Vehicle] = {}
 _BUILT_SIZE = 256
 
 
-def _frozen(value: Any) -> Any:
-    """A hashable form of a parsed YAML/JSON value that tells apart what validation tells
-    apart (types included: ``1``, ``1.0`` and ``True`` differ); None if it has anything else
-    (then nothing is cached)."""
-    kind = type(value)
-    if kind in _SCALARS:
-        # NaN never equals itself: such a key just misses (and validation refuses NaN)
-        return (kind, value)
-    if kind is dict or isinstance(value, Mapping):
-        items = []
-        for k, v in value.items():
-            fv = _frozen(v)
-            if fv is None or type(k) not in _SCALARS:
-                return None
-            items.append(((type(k).__name__, k), fv))
-        try:
-            return ("m", tuple(sorted(items)))
-        except TypeError:
-            return None
-    if kind is list or kind is tuple:
-        parts = []
-        for v in value:
-            fv = _frozen(v)
-            if fv is None:
-                return None
-            parts.append(fv)
-        return (kind, tuple(parts))
-    return None
-
-
-_SCALARS = (str, float, int, bool, type(None))
+def _frozen(value: Any) -> str | None:
+    """A key for a parsed YAML/JSON mapping: its JSON text with sorted keys (``1``, ``1.0``
+    and ``true`` stay apart; floats are written exactly); None if it has anything JSON does
+    not write (then nothing is cached). Two mappings can share a key only through dict keys
+    that are not strings (JSON writes ``1`` and ``"1"`` alike), and a vehicle mapping with
+    such a key is refused (unknown field), so it is never cached."""
+    try:
+        return json.dumps(value, sort_keys=True, allow_nan=True)
+    except (TypeError, ValueError):
+        return None
 
 
 def vehicle_from_mapping(data: Any, source: str = "<mapping>") -> Vehicle:

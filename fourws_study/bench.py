@@ -11,6 +11,9 @@ law and driver answer every 10 ms. Reported (:func:`run_study_benchmark`):
 ``loop_kernel_us_per_step``
     its inverse, microseconds; compare ``fourws bench``'s ``kernel_us_per_step_8dof`` (the
     bare RK4 loop of one run);
+``batch_kernel_steps_per_s``, ``batch_kernel_us_per_step``
+    one core, the batch kernel alone over one group of ``LANES`` points (16: the first
+    points of the study), the way a study runs them (vector instructions for the STI tire);
 ``compiled_run_steps_per_s``
     one core, the compiled run with its Python preparation (maneuver, parameters);
 ``study_first_run``
@@ -19,7 +22,8 @@ law and driver answer every 10 ms. Reported (:func:`run_study_benchmark`):
     linear eigenvalues, written block by block, wall time to the merged table;
 ``study_steps_per_s``
     the same study again per worker count (local processes forked from this one, caches
-    filled): the steady state of a long study;
+    filled): the steady state of a long study; ``rhs_per_s`` counts the four right-hand
+    sides of each RK4 step (tools that count one evaluation per step compare with it);
 ``dask``
     the study on a Dask LocalCluster: its start-up, the round trip of an empty task
     (median of ``dask_tasks``), the study's first run (fourws loaded into the workers) and
@@ -41,7 +45,9 @@ from pathlib import Path
 from typing import Any
 
 from fourws_study.execute import run_study
-from fourws_study.kernel import build_law, compiled_plan, run_compiled
+from fourws_sim.lanes import LANES
+from fourws_study.kernel import (build_law, compiled_plan, prepare_compiled, run_compiled,
+                                 run_compiled_block)
 from fourws_study.point import run_point
 from fourws_study.spec import Study, study_from_mapping
 
@@ -51,14 +57,19 @@ BENCH_STUDY = {
     "name": "bench",
     "scenario": "default",
     "grid": {"belief.cornering_stiffness_scale": [0.7, 1.0, 1.3],
-             "speed_kmh": {"from": 60, "to": 140, "step": 10},
+             "speed_kmh": {"from": 60, "to": 140, "step": 2.5},
              "law": ["fws", "sol1", "rwc2_3dof", "rwc4_3dof"]},
     "block_size": 16,
 }
 
 
+#: Right-hand-side evaluations per RK4 step (to compare with tools that count a step as one
+#: evaluation of the model).
+RHS_PER_STEP = 4
+
+
 def bench_study() -> Study:
-    """The benchmark study (108 points)."""
+    """The benchmark study (396 points: 3 beliefs x 33 speeds x 4 laws, in blocks of 16)."""
     return study_from_mapping(dict(BENCH_STUDY), "<fourws bench --study>")
 
 
@@ -84,9 +95,31 @@ def _loop_kernel(study: Study, repeats: int) -> dict[str, float]:
             "compiled_run_steps_per_s": steps / min(whole)}
 
 
+def _batch_kernel(study: Study, repeats: int) -> dict[str, Any]:
+    """Steps/s of the batch kernel alone: one compiled call over one group of
+    :data:`fourws_sim.lanes.LANES` points (vector instructions when the tire has lane
+    kernels), best and median of ``repeats``."""
+    preps = []
+    for i in range(min(LANES, study.n_points)):
+        config = study.config(study.point(i))
+        prep = prepare_compiled(config, build_law(config))
+        assert not isinstance(prep, str), prep
+        preps.append(prep)
+    steps = sum(p.front.size for p in preps) * preps[0].group[2]
+    times = []
+    for _ in range(repeats):
+        records = run_compiled_block(preps)
+        times.append(sum(r.loop_seconds for r in records if not isinstance(r, str)))
+    return {"batch_kernel_points": len(preps), "batch_kernel_lanes": all(p.lanes for p in preps),
+            "batch_kernel_steps_per_s": steps / min(times),
+            "batch_kernel_steps_per_s_median": steps / statistics.median(times),
+            "batch_kernel_us_per_step": min(times) / steps * 1e6}
+
+
 def _study_run(study: Study, out: Path, **kw: Any) -> dict[str, float]:
     result = run_study(study, out, **kw)
     return {"steps_per_s": result.vehicle_steps / result.seconds,
+            "rhs_per_s": RHS_PER_STEP * result.vehicle_steps / result.seconds,
             "points_per_s": result.ran / result.seconds, "seconds": result.seconds,
             "ms_per_point_per_worker": result.seconds / result.ran * 1e3
             * kw.get("workers", 1)}
@@ -139,6 +172,7 @@ def run_study_benchmark(workers: tuple[int, ...] = (1, 2), repeats: int = 5,
     run_point(study, 0)  # compiled loop loaded (or compiled) in this process
     out["first_point_s"] = time.perf_counter() - t0
     out.update(_loop_kernel(study, repeats))
+    out.update(_batch_kernel(study, repeats))
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         # the first run fills this process's caches (laws, Jacobians per speed, steering),

@@ -23,6 +23,13 @@ condition, braking in a turn, the linear models -- and every compiled run that m
 only the interpreted twin decides (a refused input, a failing law, a diverging state: the
 kernel stops with a code) runs through :func:`fourws_run.closed_loop.run_twin` itself.
 The compiled path is tested to give the twin's arrays bit for bit (``test/test_study.py``).
+
+A study runs the compiled points of a block together (:func:`run_compiled_block`, one
+compiled call per tire, step and control period): in vector instructions, 16 points at a
+time (:func:`fourws_study.loop_kernels.closed_loop_lanes`), when the tire has lane kernels
+(the STI tire with its Table C.1 ``G2 = 1``), else point after point
+(:func:`~fourws_study.loop_kernels.closed_loop_block`). Either gives each point exactly its
+single call's numbers (:func:`run_compiled`).
 """
 
 from __future__ import annotations

@@ -63,6 +63,7 @@ own). Errors are :class:`~fourws_sim.errors.ParameterError` naming the field and
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -79,7 +80,7 @@ from fourws_sim.config_yaml import plain_copy
 from fourws_sim.errors import FourwsError, ParameterError, UnknownNameError
 from fourws_sim.maneuvers import ManeuverSpec, maneuver_spec_from_mapping
 from fourws_sim.models import eightdof
-from fourws_sim.params import (CONFIG_DIR, load_vehicle, resolve_config_path,
+from fourws_sim.params import (CONFIG_DIR, Vehicle, load_vehicle, resolve_config_path,
                                vehicle_from_mapping)
 
 STUDY_DIR = CONFIG_DIR / "studies"
@@ -390,10 +391,15 @@ class Study:
             raise ParameterError(f"point {point.index} ({values})", _problem(exc),
                                  self.source) from None
 
+    @functools.cached_property
+    def _base_vehicle(self) -> Vehicle:
+        """The base run's vehicle, validated once (points that change no vehicle field)."""
+        return vehicle_from_mapping(self.base.vehicle_map, self.source)
+
     def _config(self, settings: tuple[tuple[Axis, Any], ...]) -> RunConfig:
         base = self.base
         sc = base.scenario
-        vehicle_map = plain_copy(base.vehicle_map)
+        vehicle_map = None  # copied from the base at the first change
         maneuver_map = plain_copy(base.maneuver_map)
         scales = list(base.belief_scales)
         law = base.law
@@ -405,6 +411,8 @@ class Study:
                 elif target.kind == "maneuver":
                     _apply(maneuver_map, target, axis.op, value)
                 elif target.kind == "vehicle":
+                    if vehicle_map is None:
+                        vehicle_map = plain_copy(base.vehicle_map)
                     _apply(vehicle_map, target, axis.op, value)
                 elif target.path in (("front",), ("rear",)):
                     i = 0 if target.path == ("front",) else 1
@@ -412,13 +420,17 @@ class Study:
                 else:
                     belief_changes.append((target, axis.op, value))
         source = self.source
-        vehicle = vehicle_from_mapping(vehicle_map, source)
-        belief_map = plain_copy(base.belief_map if base.belief_map is not None
-                                else vehicle_map)
-        for target, op, value in belief_changes:
-            _apply(belief_map, target, op, value)
-        belief_vehicle = (vehicle if base.belief_map is None and not belief_changes
-                          else vehicle_from_mapping(belief_map, source))
+        vehicle = (self._base_vehicle if vehicle_map is None
+                   else vehicle_from_mapping(vehicle_map, source))
+        if base.belief_map is None and not belief_changes:
+            belief_vehicle = vehicle
+        else:
+            belief_map = plain_copy(base.belief_map if base.belief_map is not None
+                                    else (base.vehicle_map if vehicle_map is None
+                                          else vehicle_map))
+            for target, op, value in belief_changes:
+                _apply(belief_map, target, op, value)
+            belief_vehicle = vehicle_from_mapping(belief_map, source)
         for name, scale in zip(("front", "rear"), scales):
             if not (math.isfinite(scale) and scale > 0.0):
                 raise ParameterError(f"belief.cornering_stiffness_scale_{name}",
