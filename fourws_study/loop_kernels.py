@@ -131,11 +131,9 @@ def _gains(kind, speed, params, out):  # type: ignore[no-untyped-def]
         table_gains(speed, params, out)
 
 
-def _outputs(x, u, q, cf, cr, dx, aux, t, row):  # type: ignore[no-untyped-def]
-    """The state channels of ``row`` at time ``t``: ``Simulator.outputs()`` of state ``x``
-    with the held input ``u`` (accelerations and applied road-wheel angles from the
-    right-hand side)."""
-    _rhs(x, u, q, cf, cr, dx, aux)
+def _state_row(x, t, ax, ay, delta_f, delta_r, row):  # type: ignore[no-untyped-def]
+    """The state channels of ``row`` at time ``t`` from state ``x`` and what the right-hand
+    side gives with the held input (accelerations, applied road-wheel angles)."""
     U = x[i_u]
     V = x[i_v]
     row[C_T] = t
@@ -148,24 +146,40 @@ def _outputs(x, u, q, cf, cr, dx, aux, t, row):  # type: ignore[no-untyped-def]
     row[C_PHI] = x[i_phi]
     row[C_P] = x[i_p]
     row[C_BETA] = math.atan2(V, U) if (U != 0.0 or V != 0.0) else 0.0
-    row[C_AX] = aux[a_ax]
-    row[C_AY] = aux[a_ay]
-    row[C_DF] = aux[a_df]
-    row[C_DR] = aux[a_dr]
+    row[C_AX] = ax
+    row[C_AY] = ay
+    row[C_DF] = delta_f
+    row[C_DR] = delta_r
+
+
+def _outputs(x, u, q, cf, cr, dx, aux, t, row):  # type: ignore[no-untyped-def]
+    """The state channels of ``row`` at time ``t``: ``Simulator.outputs()`` of state ``x``
+    with the held input ``u`` (accelerations and applied road-wheel angles from the
+    right-hand side)."""
+    _rhs(x, u, q, cf, cr, dx, aux)
+    _state_row(x, t, aux[a_ax], aux[a_ay], aux[a_df], aux[a_dr], row)
 
 
 def _answer(x, u, q, cf, cr, dx, aux, k, dt, n_step, row, hand_k,  # type: ignore
             front_k, drv, law_kind, law_params, min_speed, angle_limit, max_step, carry,
             drive, brake, k_gain):
     """Tick ``k`` of a closed loop up to the integration: the tick's outputs into ``row``
-    (``Simulator.outputs()`` of ``x`` with the input ``u`` held since the last step), the
-    maneuver node's answer (its steering, the speed-hold driver), the controller's (the law
-    through the actuator), and the input the simulator holds for the next control period,
-    written into ``u``. ``carry`` holds the driver's integral, the time of its last answer
-    and the actuator's angle between ticks. Returns ``DONE`` or why the twin must take
-    over."""
+    (``Simulator.outputs()`` of ``x`` with the input ``u`` held since the last step), then
+    :func:`_respond`."""
+    _outputs(x, u, q, cf, cr, dx, aux, (k * n_step) * dt, row)
+    return _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv, law_kind, law_params,
+                    min_speed, angle_limit, max_step, carry, drive, brake, k_gain)
+
+
+def _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv,  # type: ignore
+             law_kind, law_params, min_speed, angle_limit, max_step, carry, drive, brake,
+             k_gain):
+    """The answers to tick ``k``'s state: the maneuver node's (its steering, the speed-hold
+    driver), the controller's (the law through the actuator), and the input the simulator
+    holds for the next control period, written into ``u``. ``carry`` holds the driver's
+    integral, the time of its last answer and the actuator's angle between ticks. Returns
+    ``DONE`` or why the twin must take over."""
     t = (k * n_step) * dt
-    _outputs(x, u, q, cf, cr, dx, aux, t, row)
     U = x[i_u]
     V = x[i_v]
     r = x[i_r]
@@ -336,8 +350,9 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
     """:func:`closed_loop_block` (same arguments and results) with the integration of
     :data:`fourws_sim.lanes.LANES` points at a time in vector instructions
     (``rk4_lanes`` of the tire's kernel module): each control tick answers every point with
-    the scalar code of :func:`closed_loop` (``_answer``), then one control period of RK4 runs
-    for all of them at once. A point gets exactly its :func:`closed_loop` numbers (the lane
+    the scalar code of :func:`closed_loop` (``_respond``; the tick's outputs from one lane
+    right-hand side of all points), then one control period of RK4 runs for all of them at
+    once. A point gets exactly its :func:`closed_loop` numbers (the lane
     right-hand side is the scalar one's operations, branch-free; ``test_study.py``).
     Only for a tire with lane kernels (``_LANES`` not None)."""
     n_points = x.shape[0]
@@ -381,6 +396,11 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
             if j < n_lanes and n_ticks[b] > most:
                 most = n_ticks[b]
         for k in range(most + 1):
+            # the tick's outputs of every lane at once: the right-hand side of the state with
+            # the input held since the last step (Simulator.outputs())
+            for i in range(n_x):
+                IN[i] = X[i]
+            _LANES.rhs_lanes(IN, OUT)
             for j in range(n_lanes):
                 if running[j] == 0:
                     continue
@@ -395,10 +415,14 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
                     ticks[b] = n
                     running[j] = 0
                     continue
-                code = _answer(xj, ul[j], q[b], cf[b], cr[b], dx, aux, k, dt, n_step,
-                               out[b, k], hand[b, k], front[b, k], drv[b], law_kind[b],
-                               law_flat[law_start[b]:law_start[b + 1]], min_speed[b],
-                               angle_limit[b], max_step[b], carry[j], drive, brake, k_gain)
+                row = out[b, k]
+                _state_row(xj, (k * n_step) * dt, OUT[_LANES.R_AX * LANES + j],
+                           OUT[_LANES.R_AY * LANES + j], OUT[_LANES.R_DF * LANES + j],
+                           OUT[_LANES.R_DR * LANES + j], row)
+                code = _respond(xj, ul[j], k, dt, n_step, row, hand[b, k], front[b, k],
+                                drv[b], law_kind[b], law_flat[law_start[b]:law_start[b + 1]],
+                                min_speed[b], angle_limit[b], max_step[b], carry[j], drive,
+                                brake, k_gain)
                 if code != DONE:
                     codes[b] = code
                     ticks[b] = k
@@ -457,6 +481,8 @@ def _jit(func: Any) -> Any:
 
 _gains = numba.njit(inline="always", **JIT_OPTIONS)(_gains)
 _outputs = numba.njit(inline="always", **JIT_OPTIONS)(_outputs)
+_state_row = numba.njit(inline="always", **JIT_OPTIONS)(_state_row)
+_respond = numba.njit(inline="always", **JIT_OPTIONS)(_respond)
 _answer = numba.njit(inline="always", **JIT_OPTIONS)(_answer)
 _final = numba.njit(inline="always", **JIT_OPTIONS)(_final)
 closed_loop = _jit(closed_loop)

@@ -361,7 +361,8 @@ def _lanes_case(module, rng):  # type: ignore[no-untyped-def]
 
 def test_lane_right_hand_side_equals_the_scalar_one_bit_for_bit() -> None:
     """``rhs_lanes`` (the vectorized right-hand side of the study's batch kernel) gives each
-    lane exactly ``rhs``'s derivatives and slip rate."""
+    lane exactly ``rhs``'s derivatives, slip rate, accelerations and applied road-wheel
+    angles (a tick's outputs)."""
     from fourws_sim.lanes import LANES
 
     module = _lane_module()
@@ -378,6 +379,11 @@ def test_lane_right_hand_side_equals_the_scalar_one_bit_for_bit() -> None:
         assert got.tobytes() == dx.tobytes(), ln
         rate = OUT[module.R_RATE * LANES + ln]
         assert rate == aux[eightdof._AUX_RATE] or (np.isnan(rate) and ln == 4)
+        for row, slot in ((module.R_AX, eightdof._AUX_AX), (module.R_AY, eightdof._AUX_AY),
+                          (module.R_DF, eightdof._AUX_DELTA_F),
+                          (module.R_DR, eightdof._AUX_DELTA_R)):
+            got, want = OUT[row * LANES + ln], aux[slot]
+            assert np.array([got]).tobytes() == np.array([want]).tobytes(), (ln, row)
 
 
 def test_lane_rk4_equals_the_scalar_rk4_bit_for_bit() -> None:

@@ -640,10 +640,15 @@ R_PT = R_Q + len(PARAM)
 R_CF = R_PT + N_PT
 R_CR = R_CF + N_COEF
 N_IN = R_CR + N_COEF
-#: Rows of the lanes' output array: dx/dt and the fastest slip rate.
+#: Rows of the lanes' output array: dx/dt, the fastest slip rate, and what a tick's
+#: outputs take from the right-hand side (accelerations, applied road-wheel angles).
 R_DX = 0
 R_RATE = N_STATE
-N_OUT = R_RATE + 1
+R_AX = R_RATE + 1
+R_AY = R_AX + 1
+R_DF = R_AY + 1
+R_DR = R_DF + 1
+N_OUT = R_DR + 1
 
 
 def _lanes_unavailable(*args):  # type: ignore[no-untyped-def]
@@ -701,8 +706,9 @@ _lane_wheel = _jit_inline(_lane_wheel)
 
 
 def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
-    """``_rhs_terms`` of the LANES lanes of ``IN`` (rows ``R_*``) into ``OUT`` (dx/dt and the
-    fastest slip rate). Lanes have the steering system off."""
+    """``_rhs_terms`` of the LANES lanes of ``IN`` (rows ``R_*``) into ``OUT`` (dx/dt, the
+    fastest slip rate, the accelerations and applied road-wheel angles: ``rhs``'s ``aux``
+    slots of the same names). Lanes have the steering system off."""
     for ln in range(LANES):
         U_ = IN[(R_X + i_u) * LANES + ln]
         V = IN[(R_X + i_v) * LANES + ln]
@@ -803,6 +809,10 @@ def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
         OUT[(R_DX + i_ax) * LANES + ln] = (ax - ax_lt) * inv_tlt
         OUT[(R_DX + i_ay) * LANES + ln] = (ay - ay_lt) * inv_tlt
         OUT[R_RATE * LANES + ln] = rate
+        OUT[R_AX * LANES + ln] = ax
+        OUT[R_AY * LANES + ln] = ay
+        OUT[R_DF * LANES + ln] = delta_f
+        OUT[R_DR * LANES + ln] = delta_r
 
 
 #: One compiled copy, called (the loop over lanes inside makes the call's cost nothing).
