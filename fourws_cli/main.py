@@ -24,6 +24,7 @@ import sys
 import fourws_cli
 from fourws_cli.nodes import run_node
 from fourws_sim.errors import FourwsError, one_line
+from fourws_sim.lanes import use_wide_vectors
 
 #: Exit code of a user error: bad input, or an output that cannot be written.
 EXIT_USER_ERROR = 2
@@ -56,6 +57,8 @@ def main(argv: list[str] | None = None) -> int:
     # `fourws node NAME ...` hands everything after NAME to the node untouched (--ros-args ...)
     if len(argv) >= 1 and argv[0] == "node":
         return run_node(argv[1:])
+    if argv[:1] == ["study"] or (argv[:1] == ["bench"] and "--study" in argv):
+        use_wide_vectors()  # before numba is imported (fourws_sim.lanes)
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):

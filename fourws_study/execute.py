@@ -3,9 +3,10 @@
 """Running a study: blocks of points as tasks, on this machine's cores or on Dask.
 
 A task is one block (:meth:`fourws_study.store.StudyStore.block_points`):
-:func:`run_block` runs its points one after the other in one process and returns their rows
-as an Arrow table; the process that runs the study writes each block as it comes back
-(:meth:`~fourws_study.store.StudyStore.write_block`). Backends:
+:func:`run_encoded_block` runs its points in one process (their compiled runs in one call of
+the batch kernel) and returns their rows encoded as the block's Parquet file; the process
+that runs the study writes each block as it comes back
+(:meth:`~fourws_study.store.StudyStore.write_block_data`). Backends:
 
 * ``local`` (default): ``workers`` processes of this machine (a :mod:`multiprocessing`
   pool; one worker runs the blocks in this process);
@@ -38,7 +39,8 @@ from threadpoolctl import threadpool_limits
 from fourws_sim.errors import ParameterError
 from fourws_study.point import run_points
 from fourws_study.spec import MAX_POINTS, Study
-from fourws_study.store import RESULTS, StudyStore, read_results, rows_to_table, schema
+from fourws_study.store import (RESULTS, StudyStore, encode_block, read_results, rows_to_table,
+                                schema)
 
 BACKENDS = ("local", "dask")
 
@@ -55,6 +57,27 @@ def run_block(study: Study, points: range | list[int], compiled: bool = True) ->
     with threadpool_limits(limits=1):
         rows = run_points(study, points, compiled)
     return rows_to_table(rows, schema(study))
+
+
+@dataclass(frozen=True)
+class BlockResult:
+    """A finished block as its worker returns it: the rows already encoded as the block's
+    Parquet file (the worker does that work, not the process that writes the files), how
+    many they are, and the vehicle-steps they ran."""
+
+    block: int
+    data: bytes
+    rows: int
+    vehicle_steps: int
+
+
+def run_encoded_block(study: Study, block: int, points: range | list[int],
+                      compiled: bool = True) -> BlockResult:
+    """:func:`run_block`, encoded for :meth:`~fourws_study.store.StudyStore.write_block_data`
+    (a task of either backend)."""
+    table = run_block(study, points, compiled)
+    steps = int(sum(v or 0 for v in table.column("vehicle_steps").to_pylist()))
+    return BlockResult(block, encode_block(table, schema(study)), table.num_rows, steps)
 
 
 @dataclass
@@ -167,17 +190,17 @@ def _worker_init() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _block_task(args: tuple[Study, int, list[int], bool]) -> tuple[int, pa.Table]:
+def _block_task(args: tuple[Study, int, list[int], bool]) -> BlockResult:
     study, block, points, compiled = args
-    return block, run_block(study, points, compiled)
+    return run_encoded_block(study, block, points, compiled)
 
 
 def _local_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
-                 compiled: bool) -> Iterator[tuple[int, pa.Table]]:
-    """Run blocks on local processes; yields (block, table) as each finishes."""
+                 compiled: bool) -> Iterator[BlockResult]:
+    """Run blocks on local processes; yields each as it finishes."""
     if workers <= 1:
         for b, points in blocks:
-            yield b, run_block(study, points, compiled)
+            yield run_encoded_block(study, b, points, compiled)
         return
     pool = multiprocessing.get_context().Pool(min(workers, max(len(blocks), 1)),
                                               initializer=_worker_init)
@@ -192,20 +215,21 @@ def _local_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
 
 
 def _dask_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
-                scheduler: str | None, compiled: bool) -> Iterator[tuple[int, pa.Table]]:
-    """Run blocks on Dask; yields (block, table) as each finishes."""
+                scheduler: str | None, compiled: bool) -> Iterator[BlockResult]:
+    """Run blocks on Dask; yields each as it finishes."""
     # distributed: about 0.5 s to load; only the dask backend needs it
     from distributed import as_completed
 
     client = _dask_client(workers, scheduler)
     try:
         remote_study = client.scatter(study, broadcast=True)
-        futures = {client.submit(run_block, remote_study, list(points), compiled, pure=False,
+        futures = {client.submit(run_encoded_block, remote_study, b, list(points), compiled,
+                                 pure=False,
                                  key=f"fourws-study-{study.name}-block-{b}-{time.time_ns()}"): b
                    for b, points in blocks}
         try:
             for fut in as_completed(futures):
-                yield futures[fut], fut.result()
+                yield fut.result()
         finally:
             client.cancel(list(futures))
     finally:
@@ -292,15 +316,14 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
     tasks = (_dask_tasks(study, blocks, workers, scheduler, compiled) if backend == "dask"
              else _local_tasks(study, blocks, workers, compiled))
     try:
-        for b, table in tasks:
-            store.write_block(b, table)
-            run.ran += table.num_rows
-            run.done += table.num_rows
-            run.vehicle_steps += int(sum(v or 0 for v in table.column("vehicle_steps")
-                                         .to_pylist()))
+        for result in tasks:
+            store.write_block_data(result.block, result.data)
+            run.ran += result.rows
+            run.done += result.rows
+            run.vehicle_steps += result.vehicle_steps
             bar.update(run.done)
             if on_block is not None:
-                on_block(b)
+                on_block(result.block)
     except KeyboardInterrupt:
         run.interrupted = True
     finally:
@@ -313,5 +336,5 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
     return run
 
 
-__all__ = ["BACKENDS", "Progress", "RESULTS", "StudyRun", "check_size", "run_block",
-           "run_study"]
+__all__ = ["BACKENDS", "BlockResult", "Progress", "RESULTS", "StudyRun", "check_size",
+           "run_block", "run_encoded_block", "run_study"]

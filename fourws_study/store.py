@@ -136,10 +136,16 @@ class StudyStore:
 
     def write_block(self, block: int, table: pa.Table) -> Path:
         """Write a finished block: a hidden temporary file, then renamed into place."""
+        return self.write_block_data(block, encode_block(table, self.schema))
+
+    def write_block_data(self, block: int, data: bytes) -> Path:
+        """Write a finished block already encoded (:func:`encode_block`, done by the worker
+        that ran it): a hidden temporary file, flushed to disk, then renamed into place."""
         path = self.block_path(block)
         tmp = path.with_name(f".{path.name}.tmp")
-        pq.write_table(table.cast(self.schema), tmp)
-        with open(tmp, "rb") as fh:
+        with open(tmp, "wb") as fh:
+            fh.write(data)
+            fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
         return path
@@ -193,6 +199,13 @@ class StudyStore:
         return path, table.num_rows
 
 
+def encode_block(table: pa.Table, table_schema: pa.Schema) -> bytes:
+    """A block's rows as the bytes of its Parquet file (cast to the study's schema)."""
+    sink = pa.BufferOutputStream()
+    pq.write_table(table.cast(table_schema), sink)
+    return sink.getvalue().to_pybytes()
+
+
 def read_results(root: str | Path) -> pa.Table:
     """Every finished row of the study in ``root`` (its ``blocks/``), sorted by point; works
     on a study that is still running or was killed.
@@ -212,5 +225,5 @@ def read_results(root: str | Path) -> pa.Table:
     return table.sort_by("point")
 
 
-__all__ = ["BLOCKS", "MANIFEST", "RESULTS", "StudyStore", "read_results", "rows_to_table",
-           "schema", "software_versions_all", "study_hash"]
+__all__ = ["BLOCKS", "MANIFEST", "RESULTS", "StudyStore", "encode_block", "read_results",
+           "rows_to_table", "schema", "software_versions_all", "study_hash"]

@@ -68,3 +68,25 @@ def test_python_and_compiled_code_give_the_same_bits():
         s, c = trig.sincos(float(x))
         got = (out[0, i], out[1, i], out[2, i])
         assert np.array([s, c, trig.atan(float(x))]).tobytes() == np.array(got).tobytes(), x
+
+
+def test_wide_vectors_only_where_the_user_has_not_chosen(monkeypatch):
+    """use_wide_vectors (fourws study, fourws bench --study) turns off LLVM's 256-bit
+    preference only on an x86-64 CPU with AVX-512 and never over the user's own numba CPU
+    settings; the features it writes are the host's, with that one change."""
+    import llvmlite.binding as llvm
+
+    from fourws_sim import lanes
+
+    host = llvm.get_host_cpu_features().flatten()
+    for user in ({"NUMBA_CPU_FEATURES": "+sse2"}, {"NUMBA_CPU_NAME": "generic"}):
+        env = dict(user)
+        assert lanes.use_wide_vectors(env) is False and env == user
+    monkeypatch.setattr(lanes.platform, "machine", lambda: "aarch64")
+    env: dict[str, str] = {}
+    assert lanes.use_wide_vectors(env) is False and env == {}
+    monkeypatch.setattr(lanes.platform, "machine", lambda: "x86_64")
+    env = {}
+    done = lanes.use_wide_vectors(env)
+    assert done == ("+avx512f" in host.split(","))
+    assert env == ({"NUMBA_CPU_FEATURES": host + ",-prefer-256-bit"} if done else {})
