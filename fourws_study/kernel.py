@@ -384,15 +384,17 @@ def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
 
 def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
     """Run prepared points in one compiled call per group of equal tire, step and control
-    period (:func:`fourws_study.loop_kernels.closed_loop_block`); each point's record (its
+    period (:func:`fourws_study.loop_kernels.closed_loop_lanes` for the points that can run
+    in vector instructions, :func:`~fourws_study.loop_kernels.closed_loop_block` for the
+    others); each point's record (its
     ``loop_seconds`` the block's kernel time shared in proportion to its ticks), or why the
     twin must run it. The records equal :func:`run_compiled`'s bit for bit
     (``test/test_study.py``)."""
     results: list[LoopRecord | str] = [""] * len(preps)
-    groups: dict[tuple[str, float, int], list[int]] = {}
+    groups: dict[tuple[tuple[str, float, int], bool], list[int]] = {}
     for i, prep in enumerate(preps):
-        groups.setdefault(prep.group, []).append(i)
-    for (_, dt, n_step), members in groups.items():
+        groups.setdefault((prep.group, prep.lanes), []).append(i)
+    for ((_, dt, n_step), lanes), members in groups.items():
         block = [preps[i] for i in members]
         module = block[0].module
         n_ticks = np.array([p.front.size for p in block], dtype=np.int64)
@@ -411,8 +413,7 @@ def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
         ticks = np.zeros(len(block), dtype=np.int64)
         x = np.ascontiguousarray(np.stack([p.x for p in block]))
         t0 = time.perf_counter()
-        kernel = (module.closed_loop_lanes if all(p.lanes for p in block)
-                  else module.closed_loop_block)
+        kernel = module.closed_loop_lanes if lanes else module.closed_loop_block
         kernel(
             x, np.stack([p.q for p in block]), np.stack([p.cf for p in block]),
             np.stack([p.cr for p in block]), float(dt), int(n_step), hand, front, n_ticks,

@@ -143,6 +143,18 @@ def test_batch_kernel_equals_the_single_run_kernel_bit_for_bit(tmp_path):
     # the block holds a point that spins (fws at 130 km/h is past the critical speed): its
     # neighbours are unaffected, as compared above
     assert max(np.max(np.abs(r.channels["sideslip_rad"])) for r in batch) > 0.2
+    # a tire the vector kernel does not take (STI with G2 != 1 needs a power function) runs
+    # in the scalar batch kernel beside the others, with the same result
+    mixed = _study(tmp_path, "block_g2", scenario=_scenario(STEP), law="sol1",
+                   grid={"vehicle.tire.sti.g2": [1.0, 1.3]})
+    configs = [mixed.config(point) for point in mixed.points()]
+    preps = [prepare_compiled(c, build_law(c)) for c in configs]
+    assert [p.lanes for p in preps] == [True, False]
+    for got, config in zip(run_compiled_block(preps), configs):
+        want = run_compiled(config, build_law(config))
+        assert not isinstance(got, str) and not isinstance(want, str)
+        for name, values in want.channels.items():
+            assert got.channels[name].tobytes() == values.tobytes(), name
 
 
 def test_study_rows_do_not_depend_on_the_path(tmp_path):
