@@ -57,8 +57,11 @@ def main(argv: list[str] | None = None) -> int:
     # `fourws node NAME ...` hands everything after NAME to the node untouched (--ros-args ...)
     if len(argv) >= 1 and argv[0] == "node":
         return run_node(argv[1:])
-    if argv[:1] == ["study"] or (argv[:1] == ["bench"] and "--study" in argv):
-        use_wide_vectors()  # before numba is imported (fourws_sim.lanes)
+    # the batch kernel of a study (not its rerun through the node graph, whose nodes inherit
+    # the environment) with 512-bit vectors; before anything is compiled (fourws_sim.lanes)
+    if (argv[:1] == ["study"] and argv[1:2] != ["rerun"]) or (
+            argv[:1] == ["bench"] and "--study" in argv):
+        use_wide_vectors()
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):

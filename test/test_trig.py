@@ -74,11 +74,11 @@ def test_wide_vectors_only_where_the_user_has_not_chosen(monkeypatch):
     """use_wide_vectors (fourws study, fourws bench --study) turns off LLVM's 256-bit
     preference only on an x86-64 CPU with AVX-512 and never over the user's own numba CPU
     settings; the features it writes are the host's, with that one change."""
-    import llvmlite.binding as llvm
+    from numba.core import codegen
 
     from fourws_sim import lanes
 
-    host = llvm.get_host_cpu_features().flatten()
+    host = codegen.get_host_cpu_features()
     for user in ({"NUMBA_CPU_FEATURES": "+sse2"}, {"NUMBA_CPU_NAME": "generic"}):
         env = dict(user)
         assert lanes.use_wide_vectors(env) is False and env == user
