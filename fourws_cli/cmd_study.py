@@ -13,9 +13,10 @@ offline twin of the lockstep graph on all cores (or on a Dask cluster), writes
 versions beside it, and ``DIR/report/index.html``. Blocks of points are written as they
 finish; after Ctrl-C or a kill, ``--resume`` runs only what is missing.
 
-Exit code: 0 every point ran (whatever its status: a spun car is a result); 2 a bad study
-file or option (one line naming the field and the file); 130 interrupted (the finished
-blocks are kept); for ``rerun`` the exit code of ``fourws run``.
+Exit code: 0 every point ran (whatever its status: a spun car is a result); 1 a worker
+process died (killed, out of memory; one line naming it; the finished blocks are kept); 2 a
+bad study file or option (one line naming the field and the file); 130 interrupted (the
+finished blocks are kept); for ``rerun`` the exit code of ``fourws run``.
 """
 
 from __future__ import annotations
@@ -101,6 +102,7 @@ def _study(args: argparse.Namespace, target: str) -> int:
             "done": result.done, "ran": result.ran, "statuses": dict(result.statuses),
             "seconds": result.seconds, "vehicle_steps": result.vehicle_steps,
             "workers": workers, "backend": args.backend, "interrupted": result.interrupted,
+            "failed": result.failed or None,
             "results": str(result.results) if result.results else None,
             "report": str(report) if report else None}, indent=2))
     else:
@@ -109,6 +111,10 @@ def _study(args: argparse.Namespace, target: str) -> int:
         print(f"fourws study: interrupted; the finished blocks are kept: fourws study "
               f"{target} --out {out} --resume", file=sys.stderr)
         return 130
+    if result.failed:
+        print(f"fourws study: {result.failed}; the finished blocks are kept: fourws study "
+              f"{target} --out {out} --resume", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -29,6 +29,8 @@ import signal
 import sys
 import time
 from collections import Counter
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator, TextIO
@@ -36,7 +38,7 @@ from typing import Any, Callable, Iterator, TextIO
 import pyarrow as pa
 from threadpoolctl import threadpool_limits
 
-from fourws_sim.errors import ParameterError
+from fourws_sim.errors import ParameterError, one_line
 from fourws_study.point import run_points
 from fourws_study.spec import MAX_POINTS, Study
 from fourws_study.store import (RESULTS, StudyStore, encode_block, read_results, rows_to_table,
@@ -102,6 +104,9 @@ class StudyRun:
     workers : int
     backend : str
     interrupted : bool
+    failed : str
+        Why the run stopped before its end ('' if it did not): a worker process that died
+        (killed, out of memory) or a Dask worker that kept dying on a block.
     results : Path or None
     """
 
@@ -115,6 +120,7 @@ class StudyRun:
     workers: int = 1
     backend: str = "local"
     interrupted: bool = False
+    failed: str = ""
     results: Path | None = None
 
     def summary_line(self, name: str) -> str:
@@ -123,7 +129,8 @@ class StudyRun:
                            for s in ("ok", "spun", "diverged", "error"))
         rate = self.ran / self.seconds if self.seconds > 0 else 0.0
         steps = self.vehicle_steps / self.seconds if self.seconds > 0 else 0.0
-        state = "INTERRUPTED, " if self.interrupted else ""
+        state = ("INTERRUPTED, " if self.interrupted else
+                 "STOPPED (a worker died), " if self.failed else "")
         return (f"fourws study {name}: {state}{self.done}/{self.points} points ({counts}); "
                 f"ran {self.ran} in {self.seconds:.1f} s ({rate:.1f} points/s, "
                 f"{steps:.3g} vehicle-steps/s) on {self.workers} {self.backend} worker(s); "
@@ -184,6 +191,22 @@ def _dask_client(workers: int, scheduler: str | None) -> Any:
     return Client(cluster)
 
 
+class WorkerLost(Exception):
+    """A worker process died while it ran a block (its message says which and how); the
+    study stops, keeping every finished block."""
+
+
+def _exit_text(code: int | None) -> str:
+    if code is None:
+        return "still running"
+    if code < 0:
+        try:
+            return f"killed by signal {-code} ({signal.Signals(-code).name})"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit code {code}"
+
+
 def _worker_init() -> None:
     """Local workers leave Ctrl-C to the study's process, which stops them (a terminal sends
     SIGINT to the whole process group)."""
@@ -197,28 +220,54 @@ def _block_task(args: tuple[Study, int, list[int], bool]) -> BlockResult:
 
 def _local_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
                  compiled: bool) -> Iterator[BlockResult]:
-    """Run blocks on local processes; yields each as it finishes."""
+    """Run blocks on local processes; yields each as it finishes.
+
+    Raises
+    ------
+    WorkerLost
+        A worker process died (a ``multiprocessing.Pool`` would wait for its block forever;
+        the executor reports it).
+    """
     if workers <= 1:
         for b, points in blocks:
             yield run_encoded_block(study, b, points, compiled)
         return
-    pool = multiprocessing.get_context().Pool(min(workers, max(len(blocks), 1)),
-                                              initializer=_worker_init)
+    before = set(multiprocessing.active_children())
+    executor = ProcessPoolExecutor(min(workers, max(len(blocks), 1)),
+                                   mp_context=multiprocessing.get_context(),
+                                   initializer=_worker_init)
+    procs: set[multiprocessing.process.BaseProcess] = set()
+    finished = False
     try:
-        yield from pool.imap_unordered(
-            _block_task, [(study, b, list(points), compiled) for b, points in blocks])
-        pool.close()
+        futures = {executor.submit(_block_task, (study, b, list(points), compiled)): b
+                   for b, points in blocks}
+        procs = set(multiprocessing.active_children()) - before
+        for fut in as_completed(futures):
+            try:
+                result = fut.result()
+            except BrokenProcessPool:
+                dead = sorted((p.pid, _exit_text(p.exitcode)) for p in procs
+                              if p.exitcode not in (None, 0))
+                who = "; ".join(f"worker {pid} {how}" for pid, how in dead) or \
+                    "a worker process ended abruptly"
+                raise WorkerLost(f"a local worker process died while running a block "
+                                 f"({who})") from None
+            yield result
+        finished = True
     finally:
-        # an interrupted study stops its workers now, not after their blocks
-        pool.terminate()
-        pool.join()
+        if not finished:
+            # an interrupted or broken study stops its workers now, not after their blocks
+            for proc in procs | (set(multiprocessing.active_children()) - before):
+                proc.terminate()
+        executor.shutdown(wait=True, cancel_futures=True)
 
 
 def _dask_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
                 scheduler: str | None, compiled: bool) -> Iterator[BlockResult]:
     """Run blocks on Dask; yields each as it finishes."""
     # distributed: about 0.5 s to load; only the dask backend needs it
-    from distributed import as_completed
+    from distributed import KilledWorker
+    from distributed import as_completed as dask_completed
 
     client = _dask_client(workers, scheduler)
     try:
@@ -228,8 +277,13 @@ def _dask_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
                                  key=f"fourws-study-{study.name}-block-{b}-{time.time_ns()}"): b
                    for b, points in blocks}
         try:
-            for fut in as_completed(futures):
-                yield fut.result()
+            for fut in dask_completed(futures):
+                try:
+                    result = fut.result()
+                except KilledWorker as exc:
+                    raise WorkerLost(f"Dask workers kept dying while running block "
+                                     f"{futures[fut]} ({one_line(exc)})") from None
+                yield result
         finally:
             client.cancel(list(futures))
     finally:
@@ -326,6 +380,8 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
                 on_block(result.block)
     except KeyboardInterrupt:
         run.interrupted = True
+    except WorkerLost as exc:
+        run.failed = str(exc)
     finally:
         bar.close()
         run.seconds = time.perf_counter() - t0
@@ -336,5 +392,5 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
     return run
 
 
-__all__ = ["BACKENDS", "BlockResult", "Progress", "RESULTS", "StudyRun", "check_size",
-           "run_block", "run_encoded_block", "run_study"]
+__all__ = ["BACKENDS", "BlockResult", "Progress", "RESULTS", "StudyRun", "WorkerLost",
+           "check_size", "run_block", "run_encoded_block", "run_study"]

@@ -295,6 +295,35 @@ def test_killed_study_resumes_to_the_uninterrupted_table(small_study, tmp_path):
     assert final.equals(ref)
 
 
+def test_a_killed_worker_stops_the_study_loudly_and_resume_completes_it(
+        small_study, tmp_path):
+    """SIGKILL of a local worker process (the out-of-memory killer's way) ends the study at
+    once with the worker named and how it died, never a wait for the lost block; the finished
+    blocks stay, and --resume gives the uninterrupted table."""
+    import multiprocessing
+
+    path, study, serial = small_study
+    out = tmp_path / "worker_killed"
+    killed: list[int] = []
+
+    def kill_a_worker(block: int) -> None:
+        if not killed:
+            workers = [p for p in multiprocessing.active_children() if p.pid]
+            assert workers, "no worker process to kill"
+            killed.append(workers[0].pid)
+            os.kill(workers[0].pid, signal.SIGKILL)
+
+    run = run_study(study, out, workers=2, on_block=kill_a_worker)
+    assert killed and f"worker {killed[0]} killed by signal 9 (SIGKILL)" in run.failed
+    assert not run.interrupted and 1 <= run.done < study.n_points
+    assert "STOPPED (a worker died)" in run.summary_line(study.name)
+    kept = pq.read_table(out / "blocks").column("point").to_pylist()
+    assert len(kept) == run.done and len(set(kept)) == len(kept)
+    resumed = run_study(study, out, workers=2, resume=True)
+    assert not resumed.failed and resumed.ran == study.n_points - run.done
+    assert _table(out / "results.parquet").equals(_table(serial / "results.parquet"))
+
+
 # ------------------------------------------------------------------ stability boundary
 
 def test_stability_boundary_agrees_with_the_critical_speeds(tmp_path):
