@@ -207,6 +207,22 @@ def _exit_text(code: int | None) -> str:
     return f"exit code {code}"
 
 
+def _dead(procs: set[multiprocessing.process.BaseProcess],
+          wait_s: float = 2.0) -> list[tuple[int | None, str]]:
+    """The worker processes that died, with how (PID, text). The executor can see a worker
+    gone (its pipe closed) a moment before the system reports its exit status, so this waits
+    up to ``wait_s`` for one; the workers the executor itself then stops (SIGTERM) are left
+    out when another one died first."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        ended = [p for p in procs if p.exitcode not in (None, 0)]
+        if ended or time.monotonic() >= deadline:
+            break
+        time.sleep(0.01)
+    first = [p for p in ended if p.exitcode != -signal.SIGTERM] or ended
+    return sorted(((p.pid, _exit_text(p.exitcode)) for p in first), key=lambda d: d[0] or 0)
+
+
 def _worker_init() -> None:
     """Local workers leave Ctrl-C to the study's process, which stops them (a terminal sends
     SIGINT to the whole process group)."""
@@ -246,9 +262,7 @@ def _local_tasks(study: Study, blocks: list[tuple[int, range]], workers: int,
             try:
                 result = fut.result()
             except BrokenProcessPool:
-                dead = sorted((p.pid, _exit_text(p.exitcode)) for p in procs
-                              if p.exitcode not in (None, 0))
-                who = "; ".join(f"worker {pid} {how}" for pid, how in dead) or \
+                who = "; ".join(f"worker {pid} {how}" for pid, how in _dead(procs)) or \
                     "a worker process ended abruptly"
                 raise WorkerLost(f"a local worker process died while running a block "
                                  f"({who})") from None
