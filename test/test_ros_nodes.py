@@ -658,31 +658,41 @@ def test_nodes_refuse_a_malformed_expected_subscribers_parameter(rclpy_context):
         _make_node(ControllerNode, rclpy_context, expected_subscribers_json='{"a": "b"}')
 
 
+def _maneuver_beside_a_state_source(ctx, **params):
+    """A maneuver node and a node ``state_source`` that publishes states to it and collects
+    its driver inputs, both on one executor, once the two have matched each other: returns
+    ``(maneuver, source, state publisher, driver inputs received, executor)``."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from fourws_ros.maneuver_node import ManeuverNode
+
+    man = _make_node(ManeuverNode, ctx, **params)
+    src = rclpy.create_node("state_source", context=ctx)
+    pub = src.create_publisher(topics.message_class(topics.STATE), topics.STATE,
+                               topics.STREAM_QOS)
+    got: list = []
+    src.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
+                            got.append, topics.STREAM_QOS)
+    executor = SingleThreadedExecutor(context=ctx)
+    for n in (man, src):
+        executor.add_node(n)
+    assert _spin_until(executor, lambda: pub.get_subscription_count() >= 1
+                       and man.driver_pub.get_subscription_count() >= 1, 20.0)
+    return man, src, pub, got, executor
+
+
 def test_maneuver_holds_the_runs_first_state_among_rogue_ones_until_matched(rclpy_context):
     """The maneuver node gets the run's first state (step 0) and then a flood of foreign
     states before its driver-input publisher has matched the run's subscribers: once the
     second subscriber matches it answers exactly the run's state -- one driver input stamped
     t = 0 -- and none of the foreign ones (they are refused by the gate, not held)."""
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
 
-    from fourws_ros.maneuver_node import ManeuverNode
-
-    man = _make_node(ManeuverNode, rclpy_context,
-                     expected_subscribers_json=json.dumps({topics.DRIVER_INPUT: 2}))
-    src = rclpy.create_node("state_source", context=rclpy_context)
-    pub = src.create_publisher(topics.message_class(topics.STATE), topics.STATE,
-                               topics.STREAM_QOS)
-    got = []
-    src.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
-                            got.append, topics.STREAM_QOS)
+    man, src, pub, got, executor = _maneuver_beside_a_state_source(
+        rclpy_context, expected_subscribers_json=json.dumps({topics.DRIVER_INPUT: 2}))
     late = rclpy.create_node("late_subscriber", context=rclpy_context)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    for n in (man, src):
-        executor.add_node(n)
     try:
-        assert _spin_until(executor, lambda: pub.get_subscription_count() >= 1
-                           and man.driver_pub.get_subscription_count() >= 1, 20.0)
         msg = topics.message_class(topics.STATE)()
         msg.speed_mps = 23.6
         msg.step = 0
@@ -712,24 +722,8 @@ def test_maneuver_refuses_a_non_finite_state_on_the_runs_clock(rclpy_context):
     """A NaN state with the run's step 0 and stamp comes first: it is refused for its content
     (not admitted), so the run's own state 0 that follows is answered -- one driver input,
     stamped t = 0 -- and nothing is counted as a state that does not continue the run."""
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-
-    from fourws_ros.maneuver_node import ManeuverNode
-
-    man = _make_node(ManeuverNode, rclpy_context)
-    src = rclpy.create_node("state_source", context=rclpy_context)
-    pub = src.create_publisher(topics.message_class(topics.STATE), topics.STATE,
-                               topics.STREAM_QOS)
-    got = []
-    src.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
-                            got.append, topics.STREAM_QOS)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    for n in (man, src):
-        executor.add_node(n)
+    man, src, pub, got, executor = _maneuver_beside_a_state_source(rclpy_context)
     try:
-        assert _spin_until(executor, lambda: pub.get_subscription_count() >= 1
-                           and man.driver_pub.get_subscription_count() >= 1, 20.0)
         msg = topics.message_class(topics.STATE)()
         msg.speed_mps = 23.6
         msg.yaw_rate_radps = math.nan
