@@ -3,12 +3,13 @@
 """One closed-loop run of a study point: compiled where it can be, the interpreted twin
 otherwise, the same numbers either way.
 
-:func:`run_loop` runs a :class:`~fourws_run.config.RunConfig` and returns its
-:class:`LoopRecord` (one row per control tick: the ``VehicleState`` channels, the driver's
-commands, the law's command and the actuator's angle). It takes the compiled path
-(:mod:`fourws_study.loop_kernels`, one compiled call for the whole run) when the run is one
-the kernel performs exactly as :func:`fourws_run.closed_loop.run_closed_loop` does
-(:func:`compiled_plan` says why not otherwise):
+A run of a :class:`~fourws_run.config.RunConfig` gives a :class:`LoopRecord` (one row per
+control tick: the ``VehicleState`` channels, the driver's commands, the law's command and the
+actuator's angle). :func:`run_compiled` computes it in one compiled call for the whole run
+(:mod:`fourws_study.loop_kernels`) when the run is one the kernel performs exactly as
+:func:`fourws_run.closed_loop.run_closed_loop` does (:func:`compiled_plan` says why not
+otherwise), :func:`run_interpreted` with the interpreted twin; a study point takes the first
+where it can (:func:`fourws_study.point.run_points`):
 
 * the 8-DOF model with the RK4 integrator (the simulator's compiled path);
 * a maneuver whose steering is a function of time and whose driver only holds the initial
@@ -386,10 +387,9 @@ def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
     """Run prepared points in one compiled call per group of equal tire, step and control
     period (:func:`fourws_study.loop_kernels.closed_loop_lanes` for the points that can run
     in vector instructions, :func:`~fourws_study.loop_kernels.closed_loop_block` for the
-    others); each point's record (its
-    ``loop_seconds`` the block's kernel time shared in proportion to its ticks), or why the
-    twin must run it. The records equal :func:`run_compiled`'s bit for bit
-    (``test/test_study.py``)."""
+    others); each point's record (its ``loop_seconds`` the block's kernel time shared in
+    proportion to its ticks), or why the twin must run it. The records equal
+    :func:`run_compiled`'s bit for bit (``test/test_study.py``)."""
     results: list[LoopRecord | str] = [""] * len(preps)
     groups: dict[tuple[tuple[str, float, int], bool], list[int]] = {}
     for i, prep in enumerate(preps):
@@ -411,7 +411,7 @@ def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
         out = np.zeros((len(block), width + 1, module.N_CHANNELS))
         codes = np.zeros(len(block), dtype=np.int64)
         ticks = np.zeros(len(block), dtype=np.int64)
-        x = np.ascontiguousarray(np.stack([p.x for p in block]))
+        x = np.stack([p.x for p in block])
         t0 = time.perf_counter()
         kernel = module.closed_loop_lanes if lanes else module.closed_loop_block
         kernel(
@@ -430,19 +430,6 @@ def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
     return results
 
 
-def run_loop(config: RunConfig, law: Law | None = None, compiled: bool = True) -> LoopRecord:
-    """The closed-loop run of ``config``: compiled where :func:`compiled_plan` allows (and
-    ``compiled``), else, or when the compiled run stops on something only the twin decides,
-    the interpreted twin."""
-    if compiled:
-        law = law if law is not None else build_law(config)
-        result = run_compiled(config, law)
-        if isinstance(result, LoopRecord):
-            return result
-        return run_interpreted(config, fallback=result)
-    return run_interpreted(config, fallback="compiled path not asked for")
-
-
 __all__ = ["DRIVEN_WHEELS", "LoopRecord", "Prepared", "TIME_STEERED", "build_law",
            "compiled_plan", "loop_kernel_for", "prepare_compiled", "run_compiled",
-           "run_compiled_block", "run_interpreted", "run_loop", "twin_record"]
+           "run_compiled_block", "run_interpreted", "twin_record"]

@@ -316,44 +316,42 @@ def run_points(study: Study, indices: Iterable[int], compiled: bool = True
             config = study.config(point)
             row["speed_mps"] = config.speed_mps
             law = law_for(config)
+            prep = (prepare_compiled(config, law) if compiled
+                    else "compiled path not asked for")
+        except (FourwsError, np.linalg.LinAlgError) as exc:
+            _failed(row, exc)
+        else:
             runs[n] = (config, law)
-            if compiled:
-                prep = prepare_compiled(config, law)
-                if isinstance(prep, str):
-                    fallback[n] = prep
-                else:
-                    prepared[n] = len(preps)
-                    preps.append(prep)
+            if isinstance(prep, str):
+                fallback[n] = prep
             else:
-                fallback[n] = "compiled path not asked for"
-        except FourwsError as exc:
-            row.update(status="error", status_reason=str(exc))
-            runs[n] = None
-        except np.linalg.LinAlgError as exc:
-            row.update(status="error", status_reason=f"linear algebra failed: {exc}")
-            runs[n] = None
+                prepared[n] = len(preps)
+                preps.append(prep)
         seconds.append(time.perf_counter() - t0)
     records = run_compiled_block(preps) if preps else []
     for n, row in enumerate(rows):
-        run = runs[n]
-        if run is None:
-            row["wall_time_s"] = seconds[n]
-            continue
         t0 = time.perf_counter()
-        config, law = run
-        try:
-            record = records[prepared[n]] if n in prepared else fallback[n]
-            if isinstance(record, str):
-                record = run_interpreted(config, fallback=record)
-            else:
-                seconds[n] += record.loop_seconds
-            evaluate(row, study, config, law, record)
-        except FourwsError as exc:
-            row.update(status="error", status_reason=str(exc))
-        except np.linalg.LinAlgError as exc:
-            row.update(status="error", status_reason=f"linear algebra failed: {exc}")
+        run = runs[n]
+        if run is not None:
+            config, law = run
+            try:
+                record = records[prepared[n]] if n in prepared else fallback[n]
+                if isinstance(record, str):
+                    record = run_interpreted(config, fallback=record)
+                else:
+                    seconds[n] += record.loop_seconds
+                evaluate(row, study, config, law, record)
+            except (FourwsError, np.linalg.LinAlgError) as exc:
+                _failed(row, exc)
         row["wall_time_s"] = seconds[n] + (time.perf_counter() - t0)
     return rows
+
+
+def _failed(row: dict[str, Any], exc: Exception) -> None:
+    """Mark ``row`` as an ``error`` point with the message (a point never stops a study)."""
+    reason = (f"linear algebra failed: {exc}" if isinstance(exc, np.linalg.LinAlgError)
+              else str(exc))
+    row.update(status="error", status_reason=reason)
 
 
 __all__ = ["STATUSES", "ZERO_MODE_PER_S", "analysis_metrics", "columns", "evaluate",
