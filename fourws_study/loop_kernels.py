@@ -160,17 +160,6 @@ def _outputs(x, u, q, cf, cr, dx, aux, t, row):  # type: ignore[no-untyped-def]
     _state_row(x, t, aux[a_ax], aux[a_ay], aux[a_df], aux[a_dr], row)
 
 
-def _answer(x, u, q, cf, cr, dx, aux, k, dt, n_step, row, hand_k,  # type: ignore
-            front_k, drv, law_kind, law_params, min_speed, angle_limit, max_step, carry,
-            drive, brake, k_gain):
-    """Tick ``k`` of a closed loop up to the integration: the tick's outputs into ``row``
-    (``Simulator.outputs()`` of ``x`` with the input ``u`` held since the last step), then
-    :func:`_respond`."""
-    _outputs(x, u, q, cf, cr, dx, aux, (k * n_step) * dt, row)
-    return _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv, law_kind, law_params,
-                    min_speed, angle_limit, max_step, carry, drive, brake, k_gain)
-
-
 def _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv,  # type: ignore
              law_kind, law_params, min_speed, angle_limit, max_step, carry, drive, brake,
              k_gain):
@@ -244,10 +233,9 @@ def _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv,  # type: ignore
     return DONE
 
 
-def _final(x, u, q, cf, cr, dx, aux, n_ticks, dt, n_step, row):  # type: ignore
-    """The state after the last tick into ``row`` (its command columns NaN): the state the
-    simulator publishes last and the maneuver answers as done."""
-    _outputs(x, u, q, cf, cr, dx, aux, (n_ticks * n_step) * dt, row)
+def _no_commands(row):  # type: ignore[no-untyped-def]
+    """The final row (the state after the last tick, which the simulator publishes last and
+    the maneuver answers as done) has no answers: its command columns are NaN."""
     for c in range(C_HAND, N_CHANNELS):
         row[c] = math.nan
 
@@ -295,14 +283,17 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
     brake = np.zeros(4)
     carry = np.zeros(3)  # the driver's integral and last time, the actuator's angle
     for k in range(n_ticks):
-        code = _answer(x, u, q, cf, cr, dx, aux, k, dt, n_step, out[k], hand[k], front[k],
-                       drv, law_kind, law_params, min_speed, angle_limit, max_step, carry,
-                       drive, brake, k_gain)
+        # the tick's outputs: Simulator.outputs() with the input held since the last step
+        _outputs(x, u, q, cf, cr, dx, aux, (k * n_step) * dt, out[k])
+        code = _respond(x, u, k, dt, n_step, out[k], hand[k], front[k], drv, law_kind,
+                        law_params, min_speed, angle_limit, max_step, carry, drive, brake,
+                        k_gain)
         if code != DONE:
             return code, k
         if _rk4(x, u, q, cf, cr, dt, n_step) < n_step:
             return DIVERGED, k + 1
-    _final(x, u, q, cf, cr, dx, aux, n_ticks, dt, n_step, out[n_ticks])
+    _outputs(x, u, q, cf, cr, dx, aux, (n_ticks * n_step) * dt, out[n_ticks])
+    _no_commands(out[n_ticks])
     return DONE, n_ticks
 
 
@@ -365,21 +356,18 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
     RATE = np.zeros(LANES)
     stepping = np.zeros(LANES, dtype=np.int64)
     running = np.zeros(LANES, dtype=np.int64)
-    xl = np.zeros((LANES, N_STATE))
     ul = np.zeros((LANES, N_INPUT))
     carry = np.zeros((LANES, 3))
-    dx = np.zeros(N_STATE)
-    aux = np.zeros(N_AUX)
     k_gain = np.zeros(5)
     drive = np.zeros(4)
     brake = np.zeros(4)
-    xs = np.zeros(N_STATE)
+    xs = np.zeros(N_STATE)  # one lane's state (its tick's answers, its sub-steps)
     us = np.zeros(N_INPUT)
     qs = np.zeros(q.shape[1])
     cfs = np.zeros(cf.shape[1])
     crs = np.zeros(cr.shape[1])
     work = np.zeros((6, N_STATE))
-    aux_s = np.zeros(N_AUX)
+    aux = np.zeros(N_AUX)
     for g0 in range(0, n_points, LANES):
         n_lanes = min(LANES, n_points - g0)
         most = 0
@@ -405,20 +393,19 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
                 if running[j] == 0:
                     continue
                 b = g0 + j
-                xj = xl[j]
+                xj = xs
                 for i in range(N_STATE):
                     xj[i] = X[i * LANES + j]
-                n = n_ticks[b]
-                if k == n:
-                    _final(xj, ul[j], q[b], cf[b], cr[b], dx, aux, n, dt, n_step, out[b, n])
-                    codes[b] = DONE
-                    ticks[b] = n
-                    running[j] = 0
-                    continue
                 row = out[b, k]
                 _state_row(xj, (k * n_step) * dt, OUT[_LANES.R_AX * LANES + j],
                            OUT[_LANES.R_AY * LANES + j], OUT[_LANES.R_DF * LANES + j],
                            OUT[_LANES.R_DR * LANES + j], row)
+                if k == n_ticks[b]:  # the state after the last tick
+                    _no_commands(row)
+                    codes[b] = DONE
+                    ticks[b] = k
+                    running[j] = 0
+                    continue
                 code = _respond(xj, ul[j], k, dt, n_step, row, hand[b, k], front[b, k],
                                 drv[b], law_kind[b], law_flat[law_start[b]:law_start[b + 1]],
                                 min_speed[b], angle_limit[b], max_step[b], carry[j], drive,
@@ -437,7 +424,7 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
             if n_running == 0:
                 break
             _LANES.rk4_lanes(X, IN, OUT, K, XT, RATE, stepping, dt, n_step, xs, us, qs, cfs,
-                             crs, work, aux_s)
+                             crs, work, aux)
             for j in range(n_lanes):
                 if running[j] != 0 and stepping[j] == 0:  # a state became non-finite
                     codes[g0 + j] = DIVERGED
@@ -483,8 +470,7 @@ _gains = numba.njit(inline="always", **JIT_OPTIONS)(_gains)
 _outputs = numba.njit(inline="always", **JIT_OPTIONS)(_outputs)
 _state_row = numba.njit(inline="always", **JIT_OPTIONS)(_state_row)
 _respond = numba.njit(inline="always", **JIT_OPTIONS)(_respond)
-_answer = numba.njit(inline="always", **JIT_OPTIONS)(_answer)
-_final = numba.njit(inline="always", **JIT_OPTIONS)(_final)
+_no_commands = numba.njit(inline="always", **JIT_OPTIONS)(_no_commands)
 closed_loop = _jit(closed_loop)
 closed_loop_block = _jit(closed_loop_block)
 #: The batch kernel in vector instructions, where the tire has lane kernels.
