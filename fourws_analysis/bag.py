@@ -422,11 +422,10 @@ class UniformRun:
 
 
 def _monotonic(time_s: np.ndarray, values: np.ndarray,
-               order_keep: tuple[np.ndarray, np.ndarray] | None = None
-               ) -> tuple[np.ndarray, np.ndarray]:
+               order_keep: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Sort by time and drop repeated stamps (keep the last message of a stamp);
-    ``order_keep``: :func:`_order_keep` of ``time_s`` when the caller has it."""
-    order, keep = _order_keep(time_s) if order_keep is None else order_keep
+    ``order_keep``: :func:`_order_keep` of ``time_s`` (one per topic, shared by its fields)."""
+    order, keep = order_keep
     return time_s[order][keep], values[order][keep]
 
 

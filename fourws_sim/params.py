@@ -27,6 +27,7 @@ set with no roll data is a valid vehicle that a 3-DOF model refuses with a clear
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import os
@@ -493,7 +494,7 @@ class Vehicle:
         """Copy with cornering stiffnesses scaled (e.g. a controller's ±40 % belief); the
         same copy for the same scales (kept per instance: the vehicle is frozen)."""
         s_r = scale_front if scale_rear is None else scale_rear
-        scaled = self.__dict__.setdefault("_scaled", {})
+        scaled = self._scaled
         key = (float(scale_front), float(s_r))
         if key in scaled:
             return scaled[key]
@@ -508,24 +509,26 @@ class Vehicle:
 
     def cache_key(self) -> str:
         """The vehicle as canonical JSON (its :meth:`to_dict`, keys sorted): equal for equal
-        vehicles, a key for caches of what is computed from a vehicle (a Jacobian, a law).
-        Computed once per instance (the vehicle is frozen)."""
-        key = self.__dict__.get("_cache_key")
-        if key is None:
-            key = json.dumps(self.to_dict(), sort_keys=True, default=repr)
-            object.__setattr__(self, "_cache_key", key)
-        return key
+        vehicles, a key for caches of what is computed from a vehicle (a Jacobian, a law)."""
+        return self._json_key
 
     def to_dict(self) -> dict[str, Any]:
         """Plain mapping in the file layout (for recording a run's configuration); a new
-        mapping each call (built once per instance, then copied: the vehicle is frozen)."""
-        built = self.__dict__.get("_dict")
-        if built is None:
-            built = self._build_dict()
-            object.__setattr__(self, "_dict", built)
-        return plain_copy(built)
+        mapping each call."""
+        return plain_copy(self._mapping)
 
-    def _build_dict(self) -> dict[str, Any]:
+    # computed once per instance (the vehicle is frozen; cached_property writes the
+    # instance's __dict__ directly)
+    @functools.cached_property
+    def _scaled(self) -> dict[tuple[float, float], "Vehicle"]:
+        return {}  # with_axle_tires' copies by scales
+
+    @functools.cached_property
+    def _json_key(self) -> str:
+        return json.dumps(self._mapping, sort_keys=True, default=repr)
+
+    @functools.cached_property
+    def _mapping(self) -> dict[str, Any]:
         out: dict[str, Any] = {"name": self.name, "description": self.description}
         for key in _SUBSYSTEMS:
             sub = getattr(self, key)
@@ -537,14 +540,14 @@ class Vehicle:
         return out
 
 
-#: Vehicles built by :func:`vehicle_from_mapping`, by the frozen form of their mapping and
-#: source (a study builds the same vehicle for many points; the analysis of a run builds its
+#: Vehicles built by :func:`vehicle_from_mapping`, by their mapping's key (:func:`_mapping_key`)
+#: and source (a study builds the same vehicle for many points; the analysis of a run builds its
 #: vehicle and belief from the run configuration).
 _BUILT: dict[tuple[str, str], Vehicle] = {}
 _BUILT_SIZE = 256
 
 
-def _frozen(value: Any) -> str | None:
+def _mapping_key(value: Any) -> str | None:
     """A key for a parsed YAML/JSON mapping: its JSON text with sorted keys (``1``, ``1.0``
     and ``true`` stay apart; floats are written exactly); None if it has anything JSON does
     not write (then nothing is cached). Two mappings can share a key only through dict keys
@@ -567,8 +570,8 @@ def vehicle_from_mapping(data: Any, source: str = "<mapping>") -> Vehicle:
     ParameterError
         On a missing or unknown field, a non-number, a non-finite or out-of-range value.
     """
-    frozen = _frozen(data)
-    key = None if frozen is None else (frozen, source)
+    text = _mapping_key(data)
+    key = None if text is None else (text, source)
     if key is not None:
         built = _BUILT.get(key)
         if built is not None:

@@ -6,7 +6,7 @@ A task is one block (:meth:`fourws_study.store.StudyStore.block_points`):
 :func:`run_encoded_block` runs its points in one process (their compiled runs in one call of
 the batch kernel) and returns their rows encoded as the block's Parquet file; the process
 that runs the study writes each block as it comes back
-(:meth:`~fourws_study.store.StudyStore.write_block_data`). Backends:
+(:meth:`~fourws_study.store.StudyStore.write_block`). Backends:
 
 * ``local`` (default): ``workers`` processes of this machine (a :mod:`multiprocessing`
   pool; one worker runs the blocks in this process);
@@ -75,7 +75,7 @@ class BlockResult:
 
 def run_encoded_block(study: Study, block: int, points: range | list[int],
                       compiled: bool = True) -> BlockResult:
-    """:func:`run_block`, encoded for :meth:`~fourws_study.store.StudyStore.write_block_data`
+    """:func:`run_block`, encoded for :meth:`~fourws_study.store.StudyStore.write_block`
     (a task of either backend)."""
     table = run_block(study, points, compiled)
     steps = int(sum(v or 0 for v in table.column("vehicle_steps").to_pylist()))
@@ -385,7 +385,7 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
              else _local_tasks(study, blocks, workers, compiled))
     try:
         for result in tasks:
-            store.write_block_data(result.block, result.data)
+            store.write_block(result.block, result.data)
             run.ran += result.rows
             run.done += result.rows
             run.vehicle_steps += result.vehicle_steps

@@ -134,11 +134,7 @@ class StudyStore:
         """Blocks with no complete file (a resumed study runs these)."""
         return [b for b in range(self.n_blocks) if not self._valid_block(b)]
 
-    def write_block(self, block: int, table: pa.Table) -> Path:
-        """Write a finished block: a hidden temporary file, then renamed into place."""
-        return self.write_block_data(block, encode_block(table, self.schema))
-
-    def write_block_data(self, block: int, data: bytes) -> Path:
+    def write_block(self, block: int, data: bytes) -> Path:
         """Write a finished block already encoded (:func:`encode_block`, done by the worker
         that ran it): a hidden temporary file, flushed to disk, then renamed into place."""
         path = self.block_path(block)
