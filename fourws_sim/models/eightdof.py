@@ -801,8 +801,9 @@ def derivatives_compiled(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> n
     (``test_eightdof_regression``) and about a hundred times faster: the linearizations
     (:func:`fourws_analysis.linearize.jacobians`) differentiate it."""
     dx = np.zeros(N_STATE)
-    kernels_for(p.tire_name).rhs(np.array(x, dtype=np.float64), np.array(u, dtype=np.float64),
-                                 p.arr, p.coeffs_front, p.coeffs_rear, dx, np.zeros(N_AUX))
+    kernels_for(p.tire_name).rhs(np.ascontiguousarray(x, dtype=np.float64),
+                                 np.ascontiguousarray(u, dtype=np.float64), p.arr,
+                                 p.coeffs_front, p.coeffs_rear, dx, np.zeros(N_AUX))
     return dx
 
 
@@ -833,7 +834,6 @@ class Kernels(NamedTuple):
     euler: Callable[..., Any]
 
 
-_KERNEL_MODULES: dict[str, Any] = {}
 _KERNEL_CACHE: dict[str, Kernels] = {}
 #: The kernel source, loaded by file (it imports this module's slots: never the reverse).
 _KERNELS_MODULE = f"{__package__}.eightdof_kernels"
@@ -868,7 +868,6 @@ def kernels_for(tire_name: str) -> Kernels:
             sys.modules[name] = module
             spec.loader.exec_module(module)
         _KERNEL_CACHE[tire_name] = Kernels(module.rhs, module.rk4, module.euler)
-        _KERNEL_MODULES[tire_name] = module
     return _KERNEL_CACHE[tire_name]
 
 
@@ -882,8 +881,8 @@ def lane_kernels_for(tire_name: str) -> Any:
     UnknownNameError
         If ``tire_name`` is not a known tire model.
     """
-    kernels_for(tire_name)
-    module = _KERNEL_MODULES[tire_name]
+    kernels_for(tire_name)  # loads the variant module
+    module = sys.modules[f"{_KERNELS_MODULE}_{tire_name}"]
     return module if module.HAS_LANES else None
 
 

@@ -248,6 +248,22 @@ def _prepare(fz_n: float, alpha_rad: float, kappa: float, mu: float,
     return True, fz, ap0, ux, uy, coeffs[_KA] * abs(ux), h, den
 
 
+@register_jitable(error_model="numpy", inline="always")
+def _saturation(sg: float, c1: float, c2: float, c3: float, c4: float) -> float:
+    """The saturation function f of the composite slip ``sg`` (for ``sg <= 1``)."""
+    sg2 = sg * sg
+    return ((c1 * sg2 * sg + c2 * sg2 + _F_SLOPE * sg)
+            / (c1 * sg2 * sg + c3 * sg2 + c4 * sg + 1.0))
+
+
+@register_jitable(error_model="numpy", inline="always")
+def _saturation_beyond(u: float, c1: float, c2: float, c3: float, c4: float) -> float:
+    """f written in ``u = 1/sigma`` (for ``sigma > 1``): the sigma -> infinity limit stays
+    finite."""
+    u2 = u * u
+    return (c1 + c2 * u + _F_SLOPE * u2) / (c1 + c3 * u + c4 * u2 + u2 * u)
+
+
 @register_jitable(error_model="numpy")
 def _pass(p: tuple[bool, float, float, float, float, float, float, float], ratio: float,
           coeffs: np.ndarray) -> tuple[float, float]:
@@ -263,14 +279,9 @@ def _pass(p: tuple[bool, float, float, float, float, float, float, float], ratio
     if not num > 0.0:
         f = 0.0
     elif num <= den:
-        sg = num / den
-        sg2 = sg * sg
-        f = ((c1 * sg2 * sg + c2 * sg2 + _F_SLOPE * sg)
-             / (c1 * sg2 * sg + c3 * sg2 + c4 * sg + 1.0))
+        f = _saturation(num / den, c1, c2, c3, c4)
     else:
-        u = den / num  # 1/sigma in [0, 1): the sigma -> infinity limit stays finite
-        u2 = u * u
-        f = (c1 + c2 * u + _F_SLOPE * u2) / (c1 + c3 * u + c4 * u2 + u2 * u)
+        f = _saturation_beyond(den / num, c1, c2, c3, c4)
     new_ratio = 1.0 - p[5] * f
     if new_ratio < 0.0:
         new_ratio = 0.0
@@ -303,13 +314,8 @@ def _lane_pass(h: float, den: float, ratio: float, kq: float, c1: float, c2: flo
     """:func:`_pass` without branches (both forms of the saturation function computed, one
     taken by the same tests): the same numbers where :func:`_pass` is defined."""
     num = h * ratio * ratio
-    sg = num / den
-    sg2 = sg * sg
-    f_low = ((c1 * sg2 * sg + c2 * sg2 + _F_SLOPE * sg)
-             / (c1 * sg2 * sg + c3 * sg2 + c4 * sg + 1.0))
-    u = den / num
-    u2 = u * u
-    f_high = (c1 + c2 * u + _F_SLOPE * u2) / (c1 + c3 * u + c4 * u2 + u2 * u)
+    f_low = _saturation(num / den, c1, c2, c3, c4)
+    f_high = _saturation_beyond(den / num, c1, c2, c3, c4)
     f = 0.0 if not num > 0.0 else (f_low if num <= den else f_high)
     new_ratio = 1.0 - kq * f
     new_ratio = 0.0 if new_ratio < 0.0 else new_ratio
