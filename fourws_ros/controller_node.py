@@ -43,6 +43,7 @@ actuator limits), again after every accepted law change.
 
 from __future__ import annotations
 
+import collections
 import json
 import math
 import sys
@@ -53,8 +54,8 @@ from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetPara
 from rclpy.node import Node
 
 from fourws_control import RearSteerActuator, available_laws, make_loop_law
-from fourws_ros import conversions, reporting, topics
-from fourws_ros.runtime import run_node
+from fourws_ros import conversions, peers, reporting, topics
+from fourws_ros.runtime import EXIT_PEERS, run_node
 from fourws_run import codecs
 from fourws_run.ticks import StateGate, law_input
 from fourws_sim.errors import FourwsError, ParameterError
@@ -64,6 +65,9 @@ from fourws_sim.params import load_vehicle, vehicle_from_mapping
 MAX_ANGLE_LIMIT_RAD = math.pi / 4
 #: Longest rate limit a parameter may set, rad/s.
 MAX_RATE_LIMIT_RADPS = 10.0
+#: A state waiting this long (wall) for its driver input is reported, naming what it waits
+#: for, s.
+WAIT_REPORT_S = 1.0
 
 
 def _float_range(lo: float, hi: float) -> list[FloatingPointRange]:
@@ -120,6 +124,10 @@ class ControllerNode(Node):
             description="lockstep | realtime", read_only=True))
         self.declare_parameter("exit_when_done", True, ParameterDescriptor(
             description="exit once the simulator's final status arrived and all is delivered"))
+        self.declare_parameter("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
+            description="wall time to wait for the simulator's states before giving up with "
+                        "a line naming what is missing, s (0: wait forever)", read_only=True,
+            floating_point_range=_float_range(0.0, 86400.0)))
 
         self.vehicle = conversions.vehicle_from_params(self)
         self.dt_s = float(self.get_parameter("control_period_s").value)
@@ -143,15 +151,21 @@ class ControllerNode(Node):
                                  self._on_sim_status, topics.STATUS_QOS)
         self._recorder = reporting.RecorderWatch(self)
         self._closing = False
+        self._sim_ended = False
         self.finished = False  # run_node: stop spinning
+        self.stop_reason = ""  # run_node: why it gave up on its peers (exit_code)
         # raw subscriptions + fourws_run.codecs: the answer chain of lockstep runs stays short
-        self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
-                                 self._on_state, topics.STREAM_QOS, raw=True)
+        state_sub = self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
+                                             self._on_state, topics.STREAM_QOS, raw=True)
+        self.peers = peers.PeerWatch(self, float(self.get_parameter("startup_timeout_s").value))
+        self.peers.need_publishers(state_sub, topics.STATE)
         self.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
                                  self._on_driver, topics.STREAM_QOS, raw=True)
         self._cmd_encoder = codecs.RearSteerCommandEncoder(topics.FRAME_BODY)
-        self._state: Any = None
-        self._state_rx = 0.0
+        # admitted states not answered yet, in order: stamp ns -> (state, wall time received)
+        self._states: collections.OrderedDict[int, tuple[dict[str, Any], float]] = \
+            collections.OrderedDict()
+        self._reported = -1
         self._driver: dict[int, float] = {}  # stamp ns -> front road-wheel angle, rad
         self._last_front = 0.0
         self.fallbacks = 0
@@ -198,8 +212,10 @@ class ControllerNode(Node):
 
     def vehicle_speed_hint(self) -> float:
         """Speed used to try a new law's gain design, m/s (the last state's, else 20)."""
-        state = getattr(self, "_state", None)
-        return float(state["speed_mps"]) if state is not None else 20.0
+        states = getattr(self, "_states", None)
+        if states:
+            return float(next(reversed(states.values()))[0]["speed_mps"])
+        return 20.0
 
     def _on_set(self, params: list[Any]) -> SetParametersResult:
         changed = {p.name: p.value for p in params if p.name in self._BUILD_PARAMS}
@@ -239,8 +255,10 @@ class ControllerNode(Node):
         self._config_pub.publish(msg)
 
     def _on_sim_status(self, msg: Any) -> None:
-        if msg.final and bool(self.get_parameter("exit_when_done").value) \
-                and self.gate.admits_final(float(msg.sim_time_s)):
+        if not msg.final or not self.gate.admits_final(float(msg.sim_time_s)):
+            return
+        self._sim_ended = True  # the simulator may leave now
+        if bool(self.get_parameter("exit_when_done").value):
             self.get_logger().info(f"simulation ended ({msg.end_reason}); stopping")
             self.finished = True
 
@@ -267,8 +285,9 @@ class ControllerNode(Node):
             self.get_logger().warning(f"refused a state: {self.gate.rejections.last}",
                                       throttle_duration_sec=1.0)
             return
-        self._state = state
-        self._state_rx = time.monotonic()
+        if not self.gate.lockstep:
+            self._states.clear()  # realtime: only the latest state is worth an answer
+        self._states[state["stamp_ns"]] = (state, time.monotonic())
         self._try_answer(fallback=False)
 
     def _on_driver(self, raw: bytes) -> None:
@@ -292,41 +311,71 @@ class ControllerNode(Node):
         self._try_answer(fallback=False)
 
     def _check_wait(self) -> None:
-        if self._state is not None and not self._answered_once:
+        if self._states:
             self._try_answer(fallback=False)  # held until the publishers matched
+        if self._sim_ended or self._closing:
+            return
+        if not self._states:
+            why = (self.peers.check_startup() if self.gate.last_step is None
+                   else self.peers.gone())
+            if why:
+                self._give_up(why)
+            return
+        stamp, (state, since) = next(iter(self._states.items()))
+        waited = time.monotonic() - since
+        if waited > WAIT_REPORT_S and stamp != self._reported:
+            # says so once per state: in the log and on /rosout, where fourws run reads it
+            self._reported = stamp
+            pubs = sorted(i.node_name for i in
+                          self.get_publishers_info_by_topic(topics.DRIVER_INPUT))
+            self.get_logger().warning(
+                f"state step {state['step']} (t = {state['sim_time_s']:.2f} s) waits "
+                f"{waited:.1f} s for its {topics.DRIVER_INPUT} (stamp {stamp} ns); "
+                f"publishers of {topics.DRIVER_INPUT}: {', '.join(pubs) or 'none'}")
         wait = float(self.get_parameter("driver_wait_s").value)
-        if wait > 0.0 and self._state is not None and time.monotonic() - self._state_rx > wait:
+        if wait > 0.0 and waited > wait:
             self._try_answer(fallback=True)
+        gone = self.peers.gone()
+        if gone:
+            self._give_up(gone)
+
+    def _give_up(self, why: str) -> None:
+        """The graph did not come together, or the simulator left: stop, saying why."""
+        self.get_logger().error(why)
+        self.stop_reason = why
+        self.exit_code = EXIT_PEERS
+        self._closing = self.finished = True
 
     def _try_answer(self, fallback: bool) -> None:
-        state = self._state
-        if state is None:
-            return
         if not self._answered_once:
-            # the first answer waits (state and driver input kept) until the command
+            # the first answer waits (states and driver inputs kept) until the command
             # publisher has matched the run's subscribers (the recorder among them)
-            if not self.matched.ready():
+            if not self._states or not self.matched.ready():
                 return
             self._answered_once = True
-        key = state["stamp_ns"]
-        front = self._driver.pop(key, None)
-        if front is None:
-            if not fallback:
-                return
-            front = self._last_front
-            self.fallbacks += 1
-            self.get_logger().warning(
-                f"no driver input for state step {state['step']}; used the latest "
-                f"({self.fallbacks} fallbacks)", throttle_duration_sec=1.0)
-        # drop driver inputs older than this tick
-        for old in [k for k in self._driver if k < key]:
-            del self._driver[old]
-        self._state = None
+        while self._states:
+            key, (state, _since) = next(iter(self._states.items()))
+            front = self._driver.pop(key, None)
+            if front is None:
+                if not fallback:
+                    return  # lockstep: the states are answered in their order
+                front = self._last_front
+                self.fallbacks += 1
+                self.get_logger().warning(
+                    f"no driver input for state step {state['step']}; used the latest "
+                    f"({self.fallbacks} fallbacks)", throttle_duration_sec=1.0)
+            # drop driver inputs older than this tick
+            for old in [k for k in self._driver if k < key]:
+                del self._driver[old]
+            del self._states[key]
+            self._answer(state, front)
+
+    def _answer(self, state: dict[str, Any], front: float) -> None:
         try:
             law_cmd = self.law.rear_angle(law_input(state, front))
             angle = self.actuator.apply(law_cmd, self.dt_s)
-            self.pub.publish(self._cmd_encoder.encode(angle, 0.0, self.law_name, key,
-                                                      state["step"]))
+            self.pub.publish(self._cmd_encoder.encode(angle, 0.0, self.law_name,
+                                                      state["stamp_ns"], state["step"]))
         except FourwsError as exc:
             # never publish a non-finite command: the simulator times out to zero rear steer
             self.get_logger().error(f"no command for step {state['step']}: {exc}",

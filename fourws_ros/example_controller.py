@@ -37,10 +37,11 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-#: QoS of the graph's message streams (fourws_ros/topics.py STREAM_QOS).
+#: QoS of the graph's message streams (fourws_ros/topics.py STREAM_QOS): transient local, so
+#: the first command reaches the simulator and the recorder whenever they match this publisher.
 STREAM_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=2000,
                         reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.VOLATILE)
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def _stamp_ns(stamp) -> int:

@@ -23,38 +23,29 @@ nodes (publisher identity from rclpy message info): a foreign status cannot end 
 
 from __future__ import annotations
 
-import os
 import shutil
 import signal
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-import rclpy
-from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.signals import SignalHandlerOptions
-from std_msgs.msg import String
-from std_srvs.srv import SetBool
-
 from fourws_ros import node_params, topics
 from fourws_ros.domains import DomainError, domain_for_run, graph_env
-from fourws_ros.identity import PublisherNames, drain
+from fourws_ros.launcher_node import LauncherNode, RunState
 from fourws_ros.processes import (ProcessGroup, describe_exit, node_command, ros_args,
                                   set_fifo, user_command)
-from fourws_run.accounting import RunAccount
-from fourws_run.bagfile import BagError, verify_bag
-from fourws_run.config import RunConfig
+from fourws_ros.startup import wait_for_graph
+from fourws_run.bagfile import BagError, read_bag, verify_bag
+from fourws_run.codecs import CodecError, parse_rear_steer_command
+from fourws_run.config import USER_LAW, RunConfig
 from fourws_run.record import Outcome, RunRecord
-from fourws_run.ticks import NOT_AFTER_PREVIOUS, SECOND_ANSWER, SKIPS_STATES
+from fourws_run.verdict import BagCheck, conclude
 from fourws_sim.errors import FourwsError
 
 Role = topics.Role
 NODE_NAMES = topics.NODE_NAMES
-#: Time allowed for every node to come up and discover the others, s.
-STARTUP_TIMEOUT_S = 60.0
 #: A run whose simulation time has not advanced for this long (wall) is stopped as stalled, s
 #: (beyond the simulator's own 60 s wait for a lockstep answer, which names the silent node;
 #: this one catches a simulator that cannot report, e.g. a stopped one).
@@ -74,23 +65,6 @@ FIFO_PRIORITY = 10
 
 class LaunchError(FourwsError):
     """The run could not be started or did not end well; the message says why."""
-
-
-@dataclass
-class _RunState:
-    """What the launcher knows of the running graph (from the run's own nodes only)."""
-
-    sim: Any = None
-    sim_final: Any = None
-    maneuver: Any = None
-    maneuver_end: Any = None
-    recorder: Any = None
-    events: list[str] = field(default_factory=list)
-    foreign: int = 0
-    last_advance: float = 0.0
-    sim_time_s: float = 0.0
-    t_start: float = 0.0
-    t_end: float = 0.0
 
 
 class _Interrupt:
@@ -118,105 +92,6 @@ class _Interrupt:
     def set(self) -> bool:
         """A signal arrived."""
         return self.count > 0
-
-
-class _LauncherNode:
-    """The launcher's ROS side: run description, status subscriptions, the pause service."""
-
-    def __init__(self, domain_id: int, config_json: str, writers: dict[Role, str],
-                 state: _RunState) -> None:
-        # the domain goes to rclpy.init; the process environment keeps the user's
-        # ROS_DOMAIN_ID (a later run in this process must see what the user set, not ours)
-        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-        for key in ("FASTDDS_DEFAULT_PROFILES_FILE",):
-            value = graph_env(domain_id).get(key)
-            if value and not os.environ.get(key):
-                os.environ[key] = value
-        self.context = Context()
-        rclpy.init(args=[], context=self.context, domain_id=domain_id,
-                   signal_handler_options=SignalHandlerOptions.NO)
-        self.node = rclpy.create_node(NODE_NAMES[Role.LAUNCHER], context=self.context)
-        # message info (publisher identity) needs the single-threaded executor
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self.state = state
-        self.writers = writers
-        self.names = PublisherNames(self.node)
-        self.config_pub = self.node.create_publisher(String, topics.RUN_CONFIG,
-                                                     topics.LATCHED_QOS)
-        self.config_pub.publish(String(data=config_json))
-        for topic, handler in ((topics.MANEUVER_STATUS, self._on_maneuver),
-                               (topics.SIM_STATUS, self._on_sim),
-                               (topics.RECORDER_STATUS, self._on_recorder)):
-            self._subscribe(topic, handler)
-        self.pause = self.node.create_client(SetBool, topics.SRV_PAUSE)
-
-    def _subscribe(self, topic: str, handler: Callable[[Any, Any], None]) -> None:
-        """Subscribe ``handler(msg, info)``, taking every queued message per wake-up (a
-        foreign node flooding a status topic cannot push the run's own messages out)."""
-        msg_type = topics.message_class(topic)
-        holder: list[Any] = []
-
-        def callback(msg: Any, info: Any) -> None:
-            handler(msg, info)
-            drain(holder[0], msg_type, False, handler)
-
-        holder.append(self.node.create_subscription(msg_type, topic, callback,
-                                                    topics.STATUS_QOS))
-
-    def spin(self, seconds: float) -> None:
-        """Run callbacks for up to ``seconds``."""
-        self.names.refresh(topics.MANEUVER_STATUS, topics.SIM_STATUS, topics.RECORDER_STATUS)
-        self.executor.spin_once(timeout_sec=seconds)
-
-    def _from(self, topic: str, info: Any, role: Role) -> bool:
-        ok = self.names.of(topic, info) == self.writers[role]
-        if not ok:
-            self.state.foreign += 1
-        return ok
-
-    def _on_maneuver(self, msg: Any, info: Any) -> None:
-        if not self._from(topics.MANEUVER_STATUS, info, Role.MANEUVER):
-            return
-        self.state.maneuver = msg
-        if msg.event:
-            self.state.events.append(msg.event)
-        if msg.done:
-            self.state.maneuver_end = msg
-
-    def _on_sim(self, msg: Any, info: Any) -> None:
-        if not self._from(topics.SIM_STATUS, info, Role.SIMULATOR):
-            return
-        state = self.state
-        if msg.sim_time_s > state.sim_time_s:
-            state.last_advance = time.monotonic()
-        state.sim_time_s = max(state.sim_time_s, float(msg.sim_time_s))
-        state.sim = msg
-        if msg.final:
-            state.sim_final = msg
-            state.t_end = state.t_end or time.monotonic()
-
-    def _on_recorder(self, msg: Any, info: Any) -> None:
-        if self._from(topics.RECORDER_STATUS, info, Role.RECORDER):
-            self.state.recorder = msg
-
-    def has_endpoint(self, topic: str, kind: str, node_name: str) -> bool:
-        """Whether ``node_name`` publishes (``kind`` "pub") or subscribes ``topic``."""
-        infos = (self.node.get_publishers_info_by_topic(topic) if kind == "pub"
-                 else self.node.get_subscriptions_info_by_topic(topic))
-        return any(i.node_name == node_name for i in infos)
-
-    def start_simulation(self) -> bool:
-        """Un-pause the simulator; False if it did not answer."""
-        future = self.pause.call_async(SetBool.Request(data=False))
-        self.executor.spin_until_future_complete(future, timeout_sec=10.0)
-        return future.done()
-
-    def close(self) -> None:
-        """Destroy the node and its context."""
-        self.executor.shutdown(timeout_sec=1.0)
-        self.node.destroy_node()
-        self.context.try_shutdown()
 
 
 def prepare_run_dir(out_dir: Path, run_name: str, overwrite: bool) -> Path:
@@ -286,14 +161,13 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
                               f"{config.scenario or 'run'}-{config.law}-{stamp}", overwrite)
     bag_path = run_dir / "bag" if config.recorded_topics else None
     params = node_params.node_parameters(config, bag_path)
-    sim_name, man_name = NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER]
-    ctrl_name, rec_name = config.controller.node_name, NODE_NAMES[Role.RECORDER]
+    names = _node_names(config)
     driver_node = "maneuver"
     if replay_driver_from is not None:
         driver_node = "replay"
-        params[man_name] = {"bag_path": str(replay_driver_from),
-                            "topics": [topics.DRIVER_INPUT], "mode": "answer",
-                            "publish_clock": False}
+        params[names.maneuver] = {"bag_path": str(replay_driver_from),
+                                  "topics": [topics.DRIVER_INPUT], "mode": "answer",
+                                  "publish_clock": False}
     for name, extra in (node_overrides or {}).items():
         params.setdefault(name, {}).update(extra)
     try:
@@ -303,7 +177,7 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
                           f"{exc.strerror or exc}") from None
     record = RunRecord(Outcome.FAILED, "", config.law, run_dir, bag_path,
                        config=config.to_dict())
-    state = _RunState()
+    state = RunState()
     failure = ""
     with _Interrupt() as interrupt:
         try:
@@ -316,47 +190,78 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         if lease.from_user:
             echo(f"  using ROS domain {lease.domain_id} (from ROS_DOMAIN_ID)")
         group = ProcessGroup(run_dir / "logs", graph_env(lease.domain_id), echo)
-        ros: _LauncherNode | None = None
+        ros: LauncherNode | None = None
         try:
-            starts = []
-            if bag_path is not None:
-                starts.append((rec_name, node_command("recorder", params_file)))
-            if config.controller.builtin:
-                starts.append((ctrl_name, node_command("controller", params_file,
-                                                       node_name=ctrl_name)))
-            else:
-                starts.append((ctrl_name, user_command(config.controller.command)
-                               + ros_args(params_file, node_name=ctrl_name)))
-            starts.append((man_name, node_command(driver_node, params_file,
-                                                  node_name=man_name)))
-            starts.append((sim_name, node_command("simulator", params_file)))
-            for name, cmd in starts:
-                try:
-                    group.start(name, cmd)
-                except OSError as exc:
-                    raise LaunchError(f"cannot start {name} ({' '.join(cmd[:3])}...): "
-                                      f"{exc.strerror or exc}") from None
-            echo(f"fourws run {config.scenario or 'run'} / {config.law}: {len(starts)} nodes "
-                 f"on ROS domain {lease.domain_id} ({config.clock_mode}), logs in "
-                 f"{run_dir / 'logs'}")
-            writers = {Role.SIMULATOR: sim_name, Role.MANEUVER: man_name,
-                       Role.CONTROLLER: ctrl_name, Role.RECORDER: rec_name}
-            ros = _LauncherNode(lease.domain_id, node_params.dumps_config(config.to_dict()),
-                                writers, state)
+            _start_nodes(config, group, params_file, names, driver_node, bag_path is not None)
+            echo(f"fourws run {config.scenario or 'run'} / {config.law}: "
+                 f"{len(group.children)} nodes on ROS domain {lease.domain_id} "
+                 f"({config.clock_mode}), logs in {run_dir / 'logs'}")
+            writers = {Role.SIMULATOR: names.simulator, Role.MANEUVER: names.maneuver,
+                       Role.CONTROLLER: names.controller, Role.RECORDER: names.recorder}
+            ros = LauncherNode(lease.domain_id, node_params.dumps_config(config.to_dict()),
+                               writers, state)
             failure = _drive(config, group, ros, state, interrupt, bag_path is not None, echo,
                              on_running)
         except LaunchError as exc:
             failure = str(exc)
         finally:
-            failure = _finish(config, group, ros, state, interrupt, failure, bag_path,
-                              (sim_name, man_name, ctrl_name, rec_name), echo)
+            failure = _finish(config, group, ros, state, interrupt, failure, bag_path, names,
+                              echo)
             if ros is not None:
                 ros.close()
             lease.release()
         record.exit_codes = group.exit_codes()
-    _conclude(record, config, state, interrupt, failure)
+    if state.t_start:
+        record.wall_time_s = max(state.t_end - state.t_start, 0.0)
+    conclude(record, config, state.sim_report(), state.maneuver_report(), interrupt.set,
+             _with_last_words(failure, state), _check_bag(record.bag_path))
+    _label_user_law(record, config)
     _write_record(record, echo)
     return record
+
+
+@dataclass(frozen=True)
+class _Names:
+    """ROS node names of the run's roles."""
+
+    simulator: str
+    maneuver: str
+    controller: str
+    recorder: str
+
+
+def _node_names(config: RunConfig) -> _Names:
+    return _Names(NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER],
+                  config.controller.node_name, NODE_NAMES[Role.RECORDER])
+
+
+def _start_nodes(config: RunConfig, group: ProcessGroup, params_file: Path, names: _Names,
+                 driver_node: str, recorded: bool) -> None:
+    """Start the node processes (recorder first, simulator last).
+
+    Raises
+    ------
+    LaunchError
+        A program cannot be started.
+    """
+    starts = []
+    if recorded:
+        starts.append((names.recorder, node_command("recorder", params_file)))
+    if config.controller.builtin:
+        starts.append((names.controller, node_command("controller", params_file,
+                                                      node_name=names.controller)))
+    else:
+        starts.append((names.controller, user_command(config.controller.command)
+                       + ros_args(params_file, node_name=names.controller)))
+    starts.append((names.maneuver, node_command(driver_node, params_file,
+                                                node_name=names.maneuver)))
+    starts.append((names.simulator, node_command("simulator", params_file)))
+    for name, cmd in starts:
+        try:
+            group.start(name, cmd)
+        except OSError as exc:
+            raise LaunchError(f"cannot start {name} ({' '.join(cmd[:3])}...): "
+                              f"{exc.strerror or exc}") from None
 
 
 def _write_record(record: RunRecord, echo: Callable[[str], None]) -> None:
@@ -366,45 +271,59 @@ def _write_record(record: RunRecord, echo: Callable[[str], None]) -> None:
         echo(f"  cannot write {record.run_dir / 'run.json'}: {exc.strerror or exc}")
 
 
-def _wait(condition: Callable[[], bool], timeout_s: float, ros: _LauncherNode,
-          interrupt: _Interrupt, group: ProcessGroup) -> str:
-    """Spin until ``condition()``; '' or why not (timeout, signal, a node failed)."""
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if interrupt.set:
-            return "interrupted (Ctrl-C / SIGTERM)"
-        dead = group.failed()
-        if dead is not None:
-            return describe_exit(dead)
-        if time.monotonic() > deadline:
-            return "timeout"
-        ros.spin(0.05)
-    return ""
+def _check_bag(bag_path: Path | None) -> BagCheck | None:
+    """The closed bag, checked again (its problems, not an exception)."""
+    if bag_path is None:
+        return None
+    try:
+        check = verify_bag(bag_path)
+    except BagError as exc:
+        return BagCheck(problems=[str(exc)])
+    problems = list(check.problems)
+    if check.complete is None and not check.problems:
+        problems.append("the bag carries no recording accounting")
+    return BagCheck(check.counts, check.accounting, problems)
 
 
-def _drive(config: RunConfig, group: ProcessGroup, ros: _LauncherNode, state: _RunState,
+def _with_last_words(failure: str, state: RunState) -> str:
+    """A failure naming a node that did not answer, with what that node last said (a
+    warning or an error on /rosout: what it was waiting for)."""
+    if not failure:
+        return failure
+    for node, words in state.last_words.items():
+        if f"({node})" in failure and "did not answer" in failure:
+            return f"{failure}; {node} last said: {words}"
+    return failure
+
+
+def _label_user_law(record: RunRecord, config: RunConfig) -> None:
+    """A user's controller names its law in every command: the record takes that name
+    (the contract: the run's label is the law the commands name)."""
+    if config.controller.builtin or record.law != USER_LAW or record.bag_path is None:
+        return
+    try:
+        messages, _check = read_bag(record.bag_path)
+    except (BagError, OSError):
+        return
+    for raw in messages:
+        if raw.topic == topics.REAR_STEER_CMD:
+            try:
+                law = parse_rear_steer_command(raw.data)["law"]
+            except CodecError:
+                return
+            if law:
+                record.law = str(law)
+            return
+
+
+def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: RunState,
            interrupt: _Interrupt, recorded: bool, echo: Callable[[str], None],
            on_running: Callable[[ProcessGroup], None] | None) -> str:
     """Wait for the graph, start the simulation, follow it to its final status; '' or the
     failure."""
-    expected = node_params.expected_endpoints(config, recorded)
-    if recorded:
-        expected.append((topics.RUN_CONFIG, "sub", NODE_NAMES[Role.RECORDER]))
-
-    def missing() -> list[tuple[str, str, str]]:
-        return [e for e in expected if not ros.has_endpoint(*e)]
-
-    why = _wait(lambda: not missing(), STARTUP_TIMEOUT_S, ros, interrupt, group)
-    if why == "timeout":
-        what = ", ".join(f"{n} {'publishing' if k == 'pub' else 'subscribing to'} {t}"
-                         for t, k, n in missing())
-        return f"graph incomplete after {STARTUP_TIMEOUT_S:.0f} s; missing: {what}"
+    why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded)
     if why:
         return why
-    why = _wait(ros.pause.service_is_ready, STARTUP_TIMEOUT_S, ros, interrupt, group)
-    if why:
-        return ("the simulator's /fourws/pause service did not appear" if why == "timeout"
-                else why)
     chain = ([NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER],
               config.controller.node_name] if config.lockstep
              else [NODE_NAMES[Role.SIMULATOR]])
@@ -420,6 +339,7 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: _LauncherNode, state: _R
     reported = -1
     called = False
     tty = sys.stderr.isatty()
+    duration = config.maneuver.duration_s
     while state.sim_final is None:
         ros.spin(0.05)
         if interrupt.set:
@@ -451,14 +371,15 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: _LauncherNode, state: _R
                     f"{STALL_TIMEOUT_S:.0f} s)"
                     + (f"; node {', '.join(stopped)} is stopped (SIGSTOP)" if stopped else "")
                     + (f"; the simulator waits for: {waiting}" if waiting else ""))
-        if not config.lockstep and state.sim_time_s > (config.maneuver.duration_s
-                                                       + REALTIME_OVERRUN_S):
+        if not config.lockstep and state.sim_time_s > duration + REALTIME_OVERRUN_S:
             return (f"the maneuver node did not end the run (t = {state.sim_time_s:.2f} s, "
-                    f"maneuver duration {config.maneuver.duration_s} s)")
+                    f"maneuver duration {duration} s)")
         if on_running is not None and not called and state.sim_time_s > 0.0:
             called = True
             on_running(group)
-        progress = state.maneuver.progress if state.maneuver is not None else 0.0
+        # the share of the planned duration simulated (the maneuver's own progress comes
+        # in its statuses, every 0.1 s of simulation time, and may lag the clock)
+        progress = min(state.sim_time_s / duration, 1.0) if duration > 0 else 0.0
         decile = int(progress * 10)
         if decile != reported:
             reported = decile
@@ -473,13 +394,13 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: _LauncherNode, state: _R
     return ""
 
 
-def _finish(config: RunConfig, group: ProcessGroup, ros: _LauncherNode | None,
-            state: _RunState, interrupt: _Interrupt, failure: str, bag_path: Path | None,
-            names: tuple[str, str, str, str], echo: Callable[[str], None]) -> str:
+def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
+            state: RunState, interrupt: _Interrupt, failure: str, bag_path: Path | None,
+            names: _Names, echo: Callable[[str], None]) -> str:
     """End the run: let the nodes deliver and the recorder close when the simulation ended,
     stop them otherwise; returns the failure (the recorder's problem added if it could not
     close the bag complete)."""
-    sim, man, ctrl, rec = names
+    sim, man, ctrl, rec = names.simulator, names.maneuver, names.controller, names.recorder
     state.t_end = state.t_end or time.monotonic()
 
     def poll(seconds: float) -> None:
@@ -527,98 +448,5 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: _LauncherNode | None,
     return failure
 
 
-def _conclude(record: RunRecord, config: RunConfig, state: _RunState, interrupt: _Interrupt,
-              failure: str) -> None:
-    """Outcome, reason and numbers of the record from what happened and the closed bag."""
-    sim = state.sim_final or state.sim
-    if sim is not None:
-        record.sim_time_s = float(sim.sim_time_s)
-        record.max_lateness_s = float(sim.max_lateness_s)
-        record.p99_lateness_s = float(sim.p99_lateness_s)
-        record.overruns = int(sim.overruns)
-        record.stale_commands = int(sim.stale_commands)
-        for reason, n in zip(sim.rejected_reasons, sim.rejected_counts):
-            record.rejections[f"{NODE_NAMES[Role.SIMULATOR]}: {reason}"] = int(n)
-    man = state.maneuver_end or state.maneuver
-    if man is not None:
-        for reason, n in zip(man.rejected_reasons, man.rejected_counts):
-            record.rejections[f"{NODE_NAMES[Role.MANEUVER]}: {reason}"] = int(n)
-    if state.t_start:
-        record.wall_time_s = max(state.t_end - state.t_start, 0.0)
-    problems = []
-    if record.bag_path is not None:
-        try:
-            check = verify_bag(record.bag_path)
-        except BagError as exc:
-            problems.append(str(exc))
-        else:
-            record.message_counts = check.counts
-            if check.accounting:
-                record.account = RunAccount.from_dict(check.accounting)
-            problems.extend(check.problems)
-            if check.complete is None and not check.problems:
-                problems.append("the bag carries no recording accounting")
-    record.reason = failure
-    if interrupt.set or failure.startswith("interrupted"):
-        record.outcome = Outcome.INTERRUPTED
-        record.reason = "interrupted (Ctrl-C / SIGTERM)"
-        return
-    if failure:
-        record.outcome = Outcome.FAILED
-        return
-    assert state.sim_final is not None
-    end = str(state.sim_final.end_reason)
-    ambiguous = {k: n for k, n in record.rejections.items() if SECOND_ANSWER in k}
-    # states refused for not continuing the run although they were on its clock: a second
-    # publisher sends states of this run, and the nodes cannot tell which one they answered
-    # (the simulator's own may have been the refused one)
-    maneuver = NODE_NAMES[Role.MANEUVER]
-    doubled = {k: n for k, n in record.rejections.items() if k.startswith(maneuver) and (
-        NOT_AFTER_PREVIOUS in k or (config.lockstep and SKIPS_STATES in k))}
-    stop = str(state.sim_final.stop_reason)
-    if doubled:  # whatever followed, the run's inputs are not certain
-        record.outcome = Outcome.FAILED
-        record.reason = ("a second publisher sent states on this run's clock ("
-                         + "; ".join(f"{n}x {k}" for k, n in doubled.items())
-                         + "): the answers applied may be to its states"
-                         + (f"; then: {stop}" if stop else ""))
-    elif stop:
-        diverged = "diverged" in stop and not problems
-        record.outcome = Outcome.DIVERGED if diverged else Outcome.FAILED
-        record.reason = stop + ("" if not problems else
-                                "; recording incomplete: " + "; ".join(problems))
-    elif problems:
-        record.outcome = Outcome.FAILED
-        record.reason = "recording incomplete: " + "; ".join(problems)
-    elif ambiguous:
-        record.outcome = Outcome.FAILED
-        record.reason = ("a second publisher answered states of this run ("
-                         + "; ".join(f"{n}x {k}" for k, n in ambiguous.items())
-                         + "): the inputs applied are not certain")
-    elif record.stale_commands:
-        record.outcome = Outcome.FAILED
-        record.reason = (f"the controller did not answer in time or sent unusable commands "
-                         f"for {record.stale_commands} control ticks (node "
-                         f"{config.controller.node_name}; zero rear steer was applied then; "
-                         f"see {record.run_dir / 'logs' / NODE_NAMES[Role.SIMULATOR]}.log)")
-    elif state.maneuver_end is not None and state.maneuver_end.end == "aborted":
-        record.outcome = Outcome.ABORTED
-        record.reason = (f"the maneuver was aborted at t = {record.sim_time_s:.2f} s of "
-                         f"{config.maneuver.duration_s} s: {state.maneuver_end.event}")
-    elif state.maneuver_end is None:
-        record.outcome = Outcome.FAILED
-        record.reason = f"the simulation ended without the maneuver's end ({end})"
-    elif state.maneuver_end.end == "stopped":
-        # the maneuver node was not done: the simulator ended on an end it did not send
-        # (a foreign 'done' status on the run's domain) or for a reason of its own
-        record.outcome = Outcome.FAILED
-        record.reason = (f"the simulation ended ({end}) at t = {record.sim_time_s:.2f} s "
-                         f"before the maneuver node was done ({state.maneuver_end.event}); "
-                         "a foreign maneuver status on the run's domain?")
-    else:
-        record.outcome = Outcome.COMPLETED
-        record.reason = end
-
-
 __all__ = ["LaunchError", "NODE_EXIT_S", "RECORDER_GRACE_S", "STALL_TIMEOUT_S",
-           "STARTUP_TIMEOUT_S", "prepare_run_dir", "run_graph"]
+           "prepare_run_dir", "run_graph"]

@@ -39,8 +39,8 @@ from typing import Any
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 
-from fourws_ros import conversions, reporting, topics
-from fourws_ros.runtime import run_node
+from fourws_ros import conversions, peers, reporting, topics
+from fourws_ros.runtime import EXIT_PEERS, run_node
 from fourws_run import codecs
 from fourws_run.ticks import StateGate
 from fourws_sim.errors import FourwsError, ParameterError
@@ -77,6 +77,10 @@ class ManeuverNode(Node):
             description="lockstep | realtime", **ro))
         self.declare_parameter("exit_when_done", True, ParameterDescriptor(
             description="exit once the maneuver is done and delivered"))
+        self.declare_parameter("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
+            description="wall time to wait for the simulator's states before giving up with "
+                        "a line naming what is missing, s (0: wait forever)",
+            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=86400.0)], **ro))
         vehicle = conversions.vehicle_from_params(self)
         inline = str(self.get_parameter("maneuver_json").value)
         if inline:
@@ -101,8 +105,11 @@ class ManeuverNode(Node):
             self, self.counts, topics.Role.MANEUVER,
             {"maneuver": self.maneuver.to_dict(), "vehicle": vehicle.name})
         # raw: the fast decoder keeps the lockstep answer chain short (fourws_run.codecs)
-        self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
-                                 self._on_state, topics.STREAM_QOS, raw=True)
+        state_sub = self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
+                                             self._on_state, topics.STREAM_QOS, raw=True)
+        self.peers = peers.PeerWatch(self, float(self.get_parameter("startup_timeout_s").value))
+        self.peers.need_publishers(state_sub, topics.STATE)
+        self._peer_timer = self.create_timer(0.1, self._check_peers)
         self._driver_encoder = codecs.DriverInputEncoder(topics.FRAME_BODY)
         self._recorder = reporting.RecorderWatch(self)
         self.matched = reporting.match_wait(self, self.counts)
@@ -115,6 +122,7 @@ class ManeuverNode(Node):
         self._phase = ""
         self.done = False
         self.finished = False  # run_node: stop spinning
+        self.stop_reason = ""  # run_node: why it gave up on its peers (exit_code)
         self.get_logger().info(f"maneuver {self.maneuver.name} "
                                f"({self.maneuver.spec.type}, {self.maneuver.duration_s} s)")
 
@@ -193,6 +201,21 @@ class ManeuverNode(Node):
         if event or outputs["step"] % STATUS_EVERY_STEPS == 0:
             self._status(stamp, phase, self.maneuver.progress(t), event)
         self._phase = phase
+
+    def _check_peers(self) -> None:
+        """Give up on a graph that does not come together, or whose simulator left."""
+        if self.done:
+            return
+        why = (self.peers.check_startup() if self.gate.last_step is None
+               else self.peers.gone())
+        if why:
+            self.stop_reason = why
+            self.exit_code = EXIT_PEERS
+            self.get_logger().error(why)
+            # the final counts still go out (a recorder closes its bag with them)
+            t = (self.gate.last_step or 0) * self.gate.dt_s
+            self._finish(conversions.time_to_ns(t), t, "stopped", f"stopped: {why}")
+            self.finished = True
 
     def _on_sim_status(self, msg: Any) -> None:
         """The simulation ended before the maneuver did (it diverged, or stopped for a node

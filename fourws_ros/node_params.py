@@ -55,6 +55,9 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
     # (fourws_ros.reporting.MatchWait): the expected count of each topic
     subscribers = dumps_config(expected_subscribers(config, records))
     gate["expected_subscribers_json"] = subscribers
+    # the launcher watches the processes and their start-up phases (fourws_ros.graph_run):
+    # the nodes' own start-up timeout, for graphs started by hand, is off
+    gate["startup_timeout_s"] = 0.0
     params: dict[str, dict[str, Any]] = {
         NODE_NAMES[Role.SIMULATOR]: {
             **vehicle, "model": config.model, "integrator": config.integrator,
@@ -68,6 +71,8 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             "recorder_window": RECORDER_WINDOW if lockstep and records else 0,
             "expected_subscribers_json": subscribers,
             "controller_node": controller,
+            "maneuver_node": NODE_NAMES[Role.MANEUVER],
+            "startup_timeout_s": 0.0,
         },
         NODE_NAMES[Role.MANEUVER]: {
             "maneuver_json": dumps_config(config.maneuver.to_dict()),
@@ -89,7 +94,7 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
     if records:
         params[NODE_NAMES[Role.RECORDER]] = {
             "bag_path": str(bag_path), "topics": list(config.recorded_topics),
-            "controller_node": controller}
+            "controller_node": controller, "startup_timeout_s": 0.0}
     return params
 
 
@@ -124,9 +129,10 @@ def expected_endpoints(config: RunConfig, recorded: bool) -> list[tuple[str, str
         (topics.STATE, "pub", sim), (topics.STATE, "sub", man), (topics.STATE, "sub", ctrl),
         (topics.DRIVER_INPUT, "pub", man), (topics.DRIVER_INPUT, "sub", sim),
         (topics.REAR_STEER_CMD, "pub", ctrl), (topics.REAR_STEER_CMD, "sub", sim),
+        # every node that answers states is counted where it must receive: the controller
+        # contract obliges a user's controller to wait for each tick's driver input too
+        (topics.DRIVER_INPUT, "sub", ctrl),
     ]
-    if config.controller.builtin:
-        expected.append((topics.DRIVER_INPUT, "sub", ctrl))
     if recorded:
         rec = NODE_NAMES[Role.RECORDER]
         expected += [(t, "sub", rec) for t in config.recorded_topics]

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
-from fourws_ros.runtime import EXIT_INCOMPLETE, EXIT_RUN_STOPPED, EXIT_USER_ERROR
+from fourws_ros.runtime import (EXIT_INCOMPLETE, EXIT_PEERS, EXIT_RUN_STOPPED, EXIT_USER_ERROR,
+                                PHASE_FD_ENV)
 
 _PR_SET_PDEATHSIG = 1
 #: How many lines of a failed node's log the launcher repeats.
@@ -89,12 +90,44 @@ def _param_text(value: Any) -> str:
 
 @dataclass
 class Child:
-    """One node process."""
+    """One node process.
+
+    ``phase`` is the start-up phase the node reported last (``configuring``, ``compiling``,
+    ``ready``, ``failed: <why>``; '' before the first, while Python imports; always '' for a
+    program that does not report, such as a user's controller), ``phase_at`` when (monotonic
+    s).
+    """
 
     name: str
     cmd: list[str]
     log_path: Path
     proc: subprocess.Popen[bytes] | None = None
+    phase: str = ""
+    phase_at: float = 0.0
+    _phase_fd: int = -1
+    _phase_buf: bytes = b""
+
+    def read_phases(self) -> None:
+        """Take the phase lines the node wrote since the last call."""
+        if self._phase_fd < 0:
+            return
+        while True:
+            try:
+                chunk = os.read(self._phase_fd, 4096)
+            except BlockingIOError:
+                break
+            except OSError:
+                chunk = b""
+            if not chunk:  # the node closed its end (it exited)
+                os.close(self._phase_fd)
+                self._phase_fd = -1
+                break
+            self._phase_buf += chunk
+        *lines, self._phase_buf = self._phase_buf.split(b"\n")
+        for line in lines:
+            if line.strip():
+                self.phase = line.decode("utf-8", "replace").strip()
+                self.phase_at = time.monotonic()
 
     def alive(self) -> bool:
         """True while the process runs."""
@@ -132,6 +165,8 @@ def describe_exit(child: Child, with_log: bool = True) -> str:
         what = "stopped the run"
     elif code == EXIT_INCOMPLETE:
         what = "closed an incomplete bag"
+    elif code == EXIT_PEERS:
+        what = "gave up on its peers"
     elif code is not None and code < 0:
         what = f"was killed by {signal.Signals(-code).name}"
     else:
@@ -178,7 +213,8 @@ class ProcessGroup:
         self.started_at = time.monotonic()
 
     def start(self, name: str, cmd: list[str]) -> Child:
-        """Start ``cmd`` as node process ``name`` (own process group, log file).
+        """Start ``cmd`` as node process ``name`` (own process group, log file, a pipe for
+        its start-up phases: :data:`fourws_ros.runtime.PHASE_FD_ENV`).
 
         Raises
         ------
@@ -190,13 +226,29 @@ class ProcessGroup:
         log_path = self.log_dir / f"{name}.log"
         if shutil.which(cmd[0], path=self.env.get("PATH")) is None and not Path(cmd[0]).is_file():
             raise FileNotFoundError(f"{cmd[0]!r}: command not found")
-        child = Child(name, cmd, log_path)
-        with open(log_path, "wb") as log:
-            child.proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
-                                          stdin=subprocess.DEVNULL, env=self.env,
-                                          start_new_session=True, preexec_fn=_child_setup)
+        child = Child(name, cmd, log_path, phase_at=time.monotonic())
+        read_fd, write_fd = os.pipe()
+        os.set_blocking(read_fd, False)
+        env = dict(self.env, **{PHASE_FD_ENV: str(write_fd)})
+        try:
+            with open(log_path, "wb") as log:
+                child.proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                              stdin=subprocess.DEVNULL, env=env,
+                                              start_new_session=True, preexec_fn=_child_setup,
+                                              pass_fds=(write_fd,))
+        except OSError:
+            os.close(read_fd)
+            raise
+        finally:
+            os.close(write_fd)
+        child._phase_fd = read_fd
         self.children.append(child)
         return child
+
+    def read_phases(self) -> None:
+        """Take every child's new start-up phase lines."""
+        for child in self.children:
+            child.read_phases()
 
     def child(self, name: str) -> Child:
         """The child process called ``name``."""

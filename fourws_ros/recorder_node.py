@@ -54,9 +54,9 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 
-from fourws_ros import topics
+from fourws_ros import peers, topics
 from fourws_ros.identity import PublisherNames, drain, publisher_gid
-from fourws_ros.runtime import EXIT_INCOMPLETE, SPIN_TIMEOUT_S, run_node
+from fourws_ros.runtime import EXIT_INCOMPLETE, EXIT_PEERS, SPIN_TIMEOUT_S, run_node
 from fourws_run.accounting import Ledger
 from fourws_run.bagfile import BagError, BagWriter
 from fourws_run.cdr import stamp_ns
@@ -125,6 +125,10 @@ class RecorderNode(Node):
         self.declare_parameter("close_when_complete", True, ParameterDescriptor(
             description="close the bag and exit once the run ended and every message is "
                         "stored"))
+        self.declare_parameter("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
+            description="wall time to wait for the simulator's states before giving up (the "
+                        "bag is closed empty, naming what is missing), s (0: wait forever)",
+            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=86400.0)], **ro))
 
         path = str(self.get_parameter("bag_path").value)
         if not path:
@@ -146,6 +150,7 @@ class RecorderNode(Node):
         self.recorded = wanted
         self.ledger = Ledger(wanted, writers)
         self.closed = False
+        self._gave_up = ""
         self._failed = False
         self.finished = False  # run_node: stop spinning
         self.stop_reason = ""
@@ -172,6 +177,9 @@ class RecorderNode(Node):
                 topics.message_class(t), t, self._make_callback(t),
                 topics.LATCHED_RECORD_QOS if t in topics.LATCHED_TOPICS else topics.TOPIC_QOS[t],
                 raw=True)
+        self.peers = peers.PeerWatch(self, float(self.get_parameter("startup_timeout_s").value))
+        if topics.STATE in self._subs:
+            self.peers.need_publishers(self._subs[topics.STATE], topics.STATE)
         self._timer = self.create_timer(STATUS_PERIOD_S, self._tick, clock=_steady_clock())
         self._names.refresh(*self._subs)
         self.get_logger().info(f"recording {len(wanted)} topics to {path}")
@@ -281,6 +289,7 @@ class RecorderNode(Node):
 
     # ------------------------------------------------------------------ progress
     def _tick(self) -> None:
+        self._check_peers()
         self._names.refresh(*self._subs)
         if self._pending:
             self._resolve_pending()
@@ -289,6 +298,22 @@ class RecorderNode(Node):
         if not self.closed and time.monotonic() - self._flushed_wall >= self._flush_wall_s:
             self._flush()
         self._check_complete()
+
+    def _check_peers(self) -> None:
+        """A graph that did not come together, or whose simulator left before its final
+        status: close the bag with what it holds (incomplete) and stop, saying why."""
+        if self.closed or self.ledger.ended or self._gave_up:
+            return
+        why = (self.peers.check_startup() if not self.peers.ready()
+               else self.peers.gone())
+        if not why:
+            return
+        # on_shutdown drains what is still queued, then closes the bag (exit code 4 when it
+        # is incomplete, as it is: the run did not end)
+        self.get_logger().error(why)
+        self._gave_up = why
+        self.exit_code = EXIT_PEERS
+        self.finished = True
 
     def _flush(self) -> None:
         if self._failed:
@@ -342,6 +367,8 @@ class RecorderNode(Node):
         if not account.complete:
             self.stop_reason = f"bag closed incomplete: {account.summary()}"
             self.exit_code = EXIT_INCOMPLETE
+        if self._gave_up:
+            self.stop_reason = f"{self._gave_up}; {self.stop_reason}".rstrip("; ")
         self._publish_status()
         total = sum(self.bag.counts.values())
         summary = ", ".join(f"{t} {n}" for t, n in self.bag.counts.items())

@@ -154,6 +154,11 @@ class MatchWait:
         self._expected = dict(expected)
         self._ready = not self._expected
 
+    @property
+    def expected(self) -> dict[str, int]:
+        """The expected subscriber count of each topic."""
+        return dict(self._expected)
+
     def ready(self) -> bool:
         """True once every counted publisher has its expected subscribers."""
         if not self._ready:

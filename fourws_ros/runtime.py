@@ -13,6 +13,8 @@ A node process ends in one of four ways, with a distinct exit code the launcher 
   (non-finite state, ...), given in ``node.stop_reason``;
 * :data:`EXIT_INCOMPLETE` (4) — the recorder closed a bag that does not hold every message
   the run published (its accounting says what is missing);
+* :data:`EXIT_PEERS` (5) — the node gave up on its peers: a node it needs never came, refused
+  its configuration, or left the graph (:mod:`fourws_ros.peers`);
 * anything else — a crash (Python traceback in the log).
 
 Signals are handled here rather than by rclpy (``SignalHandlerOptions.NO``) so a node can
@@ -22,10 +24,13 @@ the context shuts down.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import signal
 import sys
+import threading
+import time
 from typing import Any, Callable, Sequence
 
 import rclpy
@@ -35,6 +40,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
+from fourws_ros import topics
 from fourws_sim.config_yaml import read_yaml
 from fourws_sim.errors import FourwsError, one_line
 
@@ -43,10 +49,59 @@ EXIT_CRASH = 1
 EXIT_USER_ERROR = 2
 EXIT_RUN_STOPPED = 3
 EXIT_INCOMPLETE = 4
+EXIT_PEERS = 5
 
 #: How long the executor runs callbacks before the spin loop checks for a signal or a finished
 #: node again, s (how quickly a signal is noticed).
 SPIN_TIMEOUT_S = 0.05
+#: Environment variable naming a file descriptor the launcher reads the node's start-up
+#: phases from (one line each: ``configuring``, ``compiling``, ``ready``, ``failed: ...``).
+PHASE_FD_ENV = "FOURWS_PHASE_FD"
+#: A node that refused its configuration in a graph started by hand keeps announcing why on
+#: ``/fourws/node_config`` for this long before it exits, so peers starting meanwhile stop
+#: with its reason instead of waiting for their start-up timeout, s.
+ANNOUNCE_FAILURE_S = 10.0
+#: Once a node's work is done, the ROS teardown (destroying publishers, shutting rcl down)
+#: gets this long; the middleware can deadlock there (a DataWriter's destructor waiting for
+#: its event thread), and a node that did its job must not hang: the process then exits
+#: with the code it had, s.
+TEARDOWN_TIMEOUT_S = 10.0
+
+
+def report_phase(phase: str) -> None:
+    """Tell the launcher (if one started this process, :data:`PHASE_FD_ENV`) the node's
+    start-up phase; without a launcher, nothing happens."""
+    fd = os.environ.get(PHASE_FD_ENV, "")
+    if not fd.isdigit():
+        return
+    try:
+        os.write(int(fd), (phase.replace("\n", " ") + "\n").encode("utf-8", "replace"))
+    except OSError:
+        pass  # the launcher has gone: nothing to tell
+
+
+def _announce_failure(name: str, error: str) -> None:
+    """Publish ``{"node", "error"}`` on ``/fourws/node_config`` (latched) and keep it there
+    for :data:`ANNOUNCE_FAILURE_S` (peers of a hand-started graph stop with the reason); not
+    when a launcher watches the process (it has the reason at once)."""
+    if os.environ.get(PHASE_FD_ENV):
+        return
+    try:
+        node = rclpy.create_node(name)
+        pub = node.create_publisher(topics.message_class(topics.NODE_CONFIG),
+                                    topics.NODE_CONFIG, topics.LATCHED_QOS)
+        msg = topics.message_class(topics.NODE_CONFIG)()
+        msg.data = json.dumps({"node": node.get_name(), "error": error})
+        pub.publish(msg)
+        flag = _StopFlag()
+        signal.signal(signal.SIGINT, flag)
+        signal.signal(signal.SIGTERM, flag)
+        deadline = time.monotonic() + ANNOUNCE_FAILURE_S
+        while flag.signal is None and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.1)
+        node.destroy_node()
+    except rclpy_implementation.RCLError:
+        pass
 
 
 class _StopFlag:
@@ -63,6 +118,19 @@ def _rcl_message(exc: BaseException) -> str:
     """An rcl error on one line, without the C source locations rcl appends
     (``..., at ./src/parser.c:263``)."""
     return re.sub(r",? at \S+:\d+", "", one_line(exc)).strip() or type(exc).__name__
+
+
+def _exit_after(seconds: float, code: int, name: str) -> None:
+    """Exit the process with ``code`` if it is still there ``seconds`` from now (a daemon
+    timer: a normal exit before then ends it)."""
+    def stop() -> None:
+        print(f"[{name}] the ROS teardown did not finish within {seconds:g} s; exiting",
+              file=sys.stderr, flush=True)
+        os._exit(code)
+
+    timer = threading.Timer(seconds, stop)
+    timer.daemon = True
+    timer.start()
 
 
 def check_params_files(argv: Sequence[str]) -> None:
@@ -130,6 +198,7 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     flag = _StopFlag()
     signal.signal(signal.SIGINT, flag)
     signal.signal(signal.SIGTERM, flag)
+    report_phase("configuring")
     try:
         rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     except rcl_error as exc:
@@ -146,11 +215,15 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
             # ParameterException: a --ros-args/-p or --params-file value of the wrong type or
             # outside its descriptor's range
             print(f"[{name}] error: {one_line(exc)}", file=sys.stderr, flush=True)
+            report_phase(f"failed: {one_line(exc)}")
+            _announce_failure(name, one_line(exc))
             return EXIT_USER_ERROR
         except rcl_error as exc:
             print(f"[{name}] error: cannot start: {_rcl_message(exc)}", file=sys.stderr,
                   flush=True)
+            report_phase(f"failed: cannot start: {_rcl_message(exc)}")
             return EXIT_USER_ERROR
+        report_phase("ready")
         executor = make_executor(message_info=getattr(node, "needs_message_info", False))
         executor.add_node(node)
         # Callbacks run inside the executor for SPIN_TIMEOUT_S at a time (spinning until a
@@ -170,6 +243,7 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
         if reason:
             print(f"[{node.get_name()}] run stopped: {reason}", file=sys.stderr, flush=True)
             code = int(getattr(node, "exit_code", EXIT_RUN_STOPPED) or EXIT_RUN_STOPPED)
+        _exit_after(TEARDOWN_TIMEOUT_S, code, node.get_name())
         executor.remove_node(node)
         executor.shutdown(timeout_sec=1.0)
     finally:

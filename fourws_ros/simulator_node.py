@@ -2,41 +2,30 @@
 # SPDX-License-Identifier: Apache-2.0
 """Simulator node: the vehicle model of a run, publishing its state and taking the answers.
 
-The node is an adapter: the tick sequence, the trust rules for incoming messages, realtime
-pacing and recorder flow control are :mod:`fourws_run.ticks` (shared with the offline twin
-:func:`fourws_run.closed_loop.run_closed_loop`); the node converts messages and owns the ROS
-objects.
-
-Clock modes
------------
-``lockstep`` (deterministic, faster than real time)
-    Tick ``k``: publish ``VehicleState`` ``y_k`` (and ``/clock``); wait until the maneuver
-    answered with the ``DriverInput`` stamped ``y_k``'s stamp and the controller with the
-    ``RearSteerCommand`` whose ``state_step`` and ``state_stamp`` are ``y_k``'s; integrate
-    one control period with those inputs held; publish ``y_{k+1}``. Bit-identical to the
-    offline twin. With ``recorder_window`` > 0 the next tick is published only while the
-    recorder has stored all but at most that many messages of every recorded topic
-    (:class:`fourws_run.ticks.FlowWindow`): a slow recorder slows the run, it never loses data.
-``realtime`` (paced by the wall clock)
-    A thread integrates one step every ``integration_step_s`` of wall time, holds the latest
-    valid driver input and command (zero-order hold), publishes the state every
-    ``state_period_s``. Step lateness and every overrun go into the status messages (and so
-    into the bag).
+The node is an adapter: what happens on a driver input, a rear-steer command, the recorder's
+progress and the passing of time is the clock mode's, :class:`fourws_run.clock_modes.LockstepClock`
+or :class:`~fourws_run.clock_modes.RealtimeClock` (no ROS there; read their module docstring
+for the two modes), on the tick sequence of :mod:`fourws_run.ticks` that the offline twin
+shares. The node declares the parameters, builds the core, converts messages, publishes what
+the clock hands it (state and ``/clock`` on every tick, odometry/IMU every ``viz_period_s``,
+status every ``status_period_s``) and ends the run.
 
 Trust
 -----
 Inputs that cannot be this run's answers -- another tick's or no tick's stamp, a second
 answer, non-finite or impossible values, a command naming a state that was never published --
-are refused and counted by reason (``SimulatorStatus.rejected_*``). A command's age is the
-simulation time since the state it answers was published, from the node's own record, so no
-message can keep a dead controller's last command alive.
+are refused and counted by reason (``SimulatorStatus.rejected_*``). In realtime, where the
+latest input is applied as it comes, driver inputs and commands are also taken only from the
+run's maneuver and controller nodes (publisher identity from the ROS graph): a foreign
+publisher copying the run's stamps cannot steer the car.
 
-Missing answers. Lockstep never runs a tick on anything but its answers, so a loaded machine
-cannot change the numbers: it waits (after 1 s a status says for what), and after
-``command_timeout_s`` of wall time (default 60 s) it stops the run as failed, naming the node
-that stopped answering. Realtime cannot wait: a missing command means zero rear steer (counted,
-``command_timed_out``), and ``driver_timeout_s`` of simulation time without a driver input
-stops the run, naming the maneuver node.
+Liveness
+--------
+The run starts once every subscriber the run expects has matched the state publisher and the
+answers have publishers (:class:`fourws_ros.peers.PeerWatch`); a graph missing a node after
+``startup_timeout_s``, or one whose node announced a configuration failure, ends the node with
+one line naming the missing peer. A lockstep tick without its answers for ``answer_timeout_s``
+of wall time, or a peer that leaves the graph, ends the run as failed, naming the node.
 
 End of a run
 ------------
@@ -52,13 +41,9 @@ starts paused (the launcher un-pauses it once the graph is complete).
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
-import gc
 import math
-import os
 import sys
-import threading
 import time
 from typing import Any
 
@@ -67,17 +52,18 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
 from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
-from fourws_ros import conversions, reporting, topics
-from fourws_ros.runtime import run_node
+from fourws_ros import conversions, peers, reporting, topics
+from fourws_ros.identity import PublisherNames
+from fourws_ros.runtime import report_phase, run_node
 from fourws_run import codecs
-from fourws_run.ticks import (FlowWindow, InputLimits, LockstepAnswers, Pacer, RealtimeAnswers,
-                              Tick, TickEngine, whole_multiple)
+from fourws_run.clock_modes import (CLOCK_MODES, DRIVER_INPUT, LockstepClock, RealtimeClock,
+                                    make_clock)
+from fourws_run.ticks import FlowWindow, InputLimits, Tick, TickEngine, whole_multiple
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import ParameterError, UnknownNameError
 from fourws_sim.params import Tire
 from fourws_sim.simulator import Simulator
 
-CLOCK_MODES = ("lockstep", "realtime")
 #: Shortest/longest integration step a parameter may set, s.
 MIN_STEP_S, MAX_STEP_S = 1e-5, 0.1
 #: Period of the housekeeping timer (start, lockstep waits, the final status), s.
@@ -85,40 +71,50 @@ HOUSEKEEPING_S = 0.01
 #: After the simulation ended: how long (wall) the final status waits for the recorder to
 #: hold everything the run sent, s.
 FINAL_WAIT_S = 10.0
-#: GIL switch interval while the realtime thread runs, s (Python's default 5 ms would let a
-#: subscriber callback delay a step by up to 5 ms).
-_SWITCH_INTERVAL_S = 1e-4
-#: Topics whose counts the simulator knows for flow control (its own and the accepted answers).
-_FLOW_TOPICS = (topics.STATE, topics.ODOM, topics.IMU, topics.SIM_STATUS, topics.DRIVER_INPUT,
-                topics.REAR_STEER_CMD)
+#: Topics whose counts the simulator knows for flow control: its own recorded publications
+#: and the answers it accepted.
+FLOW_TOPICS = (topics.STATE, topics.ODOM, topics.IMU, topics.SIM_STATUS, topics.DRIVER_INPUT,
+               topics.REAR_STEER_CMD)
 
 
 def _frange(lo: float, hi: float) -> list[FloatingPointRange]:
     return [FloatingPointRange(from_value=lo, to_value=hi)]
 
 
+def _irange(lo: int, hi: int) -> list[IntegerRange]:
+    return [IntegerRange(from_value=lo, to_value=hi, step=1)]
+
+
 class SimulatorNode(Node):
     """Vehicle simulator (see module docstring)."""
+
+    #: Parameters that may change while the node runs (validated, cached in ``_cfg``).
+    _LIVE = ("viz_period_s", "status_period_s", "answer_timeout_s", "driver_timeout_s",
+             "initial_speed_mps", "command_stale_periods")
 
     def __init__(self) -> None:
         super().__init__("fourws_simulator")
         self._declare_parameters()
         self._cfg: dict[str, Any] = {name: self._param(name) for name in self._LIVE}
         self.add_on_set_parameters_callback(self._on_set)
-        self._build_core()
-        self._create_ros_interfaces()
         self.finished = False  # run_node: stop spinning
         self.stop_reason = ""  # run_node: exit code 3 (the run stopped for its own reason)
         self.ended = ""  # why the simulation ended ('' while it runs)
-        self.paused = not bool(self._param("autostart"))
-        self._lock = threading.Lock()
-        self._rt_thread: threading.Thread | None = None
-        self._reset_state()
+        self._final_sent = False
+        self._final_due = 0.0
+        self._build_core()
+        #: realtime takes answers only from the run's nodes: run_node spins with message info
+        self.needs_message_info = self.clock_mode == "realtime"
+        self._create_ros_interfaces()
+        self.clock = self._make_clock()
+        #: the run should go (autostart, or un-paused by /fourws/pause): it starts once the
+        #: graph is complete
+        self._run_wanted = bool(self._param("autostart"))
         self._timer = self.create_timer(HOUSEKEEPING_S, self._housekeeping)
         self.get_logger().info(
             f"{self.model_name} on {self.vehicle.name}, {self.clock_mode}, dt "
             f"{self.dt_s} s, control {self.control_period_s} s"
-            + (" (paused)" if self.paused else ""))
+            + ("" if self._run_wanted else " (paused)"))
 
     # ------------------------------------------------------------------ setup
     def _declare_parameters(self) -> None:
@@ -153,45 +149,56 @@ class SimulatorNode(Node):
             description="lockstep | realtime", **ro))
         declare("initial_speed_mps", 23.611111111111111, ParameterDescriptor(
             description="forward speed at reset, m/s", floating_point_range=_frange(0.0, 100.0)))
-        declare("command_timeout_s", 60.0, ParameterDescriptor(
-            description="realtime: rear-steer command age (simulation time since the state "
-                        "it answers) after which rear steer falls back to zero; lockstep: "
-                        "wall time to wait for a tick's answers before the run stops as "
-                        "failed (lockstep never substitutes an input), s",
+        declare("answer_timeout_s", 60.0, ParameterDescriptor(
+            description="lockstep: wall time to wait for a tick's answers (and for the "
+                        "recorder to catch up) before the run stops as failed (lockstep never "
+                        "substitutes an input), s",
             floating_point_range=_frange(1e-3, 3600.0)))
+        declare("command_stale_periods", 10, ParameterDescriptor(
+            description="realtime: a rear-steer command is fresh while the state it answers "
+                        "is at most this many control periods old (simulation time); a tick "
+                        "without a fresh command applies zero rear steer and is counted",
+            integer_range=_irange(1, 100000)))
         declare("driver_timeout_s", 1.0, ParameterDescriptor(
             description="realtime: simulation time without a new driver input after which "
                         "the run stops (the maneuver node stopped answering), s",
             floating_point_range=_frange(1e-3, 60.0)))
+        declare("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
+            description="wall time to wait for the run's other nodes before giving up with "
+                        "a line naming the missing ones, s (0: wait forever)",
+            floating_point_range=_frange(0.0, 86400.0), **ro))
         declare("autostart", True, ParameterDescriptor(
-            description="start running at once (false: paused until /fourws/pause false)"))
+            description="start running once the graph is complete (false: paused until "
+                        "/fourws/pause false)"))
         declare("controller_node", topics.NODE_NAMES[topics.Role.CONTROLLER], ParameterDescriptor(
-            description="ROS node name of the controller (named when it stops answering)",
-            read_only=True))
+            description="ROS node name of the controller (named when it stops answering; "
+                        "realtime takes commands only from it)", read_only=True))
+        declare("maneuver_node", topics.NODE_NAMES[topics.Role.MANEUVER], ParameterDescriptor(
+            description="ROS node name of the driver (named when it stops answering; "
+                        "realtime takes driver inputs only from it)", read_only=True))
         declare("exit_when_done", True, ParameterDescriptor(
             description="exit once the run has ended and everything published is delivered "
                         "(false: stay up, paused)"))
         declare("expected_state_subscribers", 0, ParameterDescriptor(
-            description="lockstep: wait for this many /fourws/state subscribers before the "
-                        "first tick", integer_range=[IntegerRange(from_value=0, to_value=64,
-                                                                  step=1)], **ro))
+            description="wait for this many /fourws/state subscribers before the first tick "
+                        "(used when expected_subscribers_json does not name the topic)",
+            integer_range=_irange(0, 64), **ro))
         declare("realtime_priority", 20, ParameterDescriptor(
             description="realtime: SCHED_FIFO priority of the integration thread (1-99; 0 = "
                         "normal scheduling). Needs CAP_SYS_NICE; without it the node warns "
-                        "and runs with normal priority", integer_range=[IntegerRange(
-                            from_value=0, to_value=99, step=1)], read_only=True))
+                        "and runs with normal priority", integer_range=_irange(0, 99),
+            read_only=True))
         declare("recorder_window", 0, ParameterDescriptor(
             description="lockstep: run at most this many messages of any recorded topic "
                         "ahead of what the recorder reports stored (0 = no recorder flow "
                         "control; must stay below the stream history depth)",
-            integer_range=[IntegerRange(from_value=0, to_value=topics.STREAM_DEPTH // 2,
-                                        step=1)], read_only=True))
+            integer_range=_irange(0, topics.STREAM_DEPTH // 2), read_only=True))
 
     def _param(self, name: str) -> Any:
         return self.get_parameter(name).value
 
     def _build_core(self) -> None:
-        # numba (about 0.5 s) only once the parameters are valid: a bad file fails fast
+        # numba (about 0.5 s warm) only once the parameters are valid: a bad file fails fast
         from fourws_sim.tires import TIRES
 
         self.clock_mode = str(self._param("clock_mode"))
@@ -211,13 +218,14 @@ class SimulatorNode(Node):
         self.control_period_s = float(self._param("control_period_s"))
         self.n_state = whole_multiple(float(self._param("state_period_s")), self.dt_s,
                                       "state_period_s")
+        report_phase("compiling")
         sim = Simulator(vehicle, model=self.model_name,
                         integrator=str(self._param("integrator")), dt_s=self.dt_s)
         self.engine = TickEngine(sim, self.control_period_s)
-        self.n_control = self.engine.n_control
         # compile the numba kernels now, not in the first (realtime) step
         self.engine.reset(float(self._cfg["initial_speed_mps"]))
         self.engine.advance(DriverCommand(0.0, 0.0), 0.0, n_steps=1)
+        self.engine.reset(float(self._cfg["initial_speed_mps"]))
         self.limits = InputLimits.for_vehicle(vehicle)
 
     def _create_ros_interfaces(self) -> None:
@@ -229,19 +237,29 @@ class SimulatorNode(Node):
         self.imu_pub = self.counts.publisher(self, topics.IMU)
         self.status_pub = self.counts.publisher(self, topics.SIM_STATUS)
         self.matched = reporting.match_wait(self, self.counts)
-        # raw + fourws_run.codecs: short lockstep answer chain
-        self.driver_sub = self.create_subscription(msg(topics.DRIVER_INPUT),
-                                                   topics.DRIVER_INPUT, self._on_driver,
-                                                   topics.STREAM_QOS, raw=True)
-        self.cmd_sub = self.create_subscription(msg(topics.REAR_STEER_CMD),
-                                                topics.REAR_STEER_CMD, self._on_cmd,
-                                                topics.STREAM_QOS, raw=True)
+        # raw + fourws_run.codecs: short lockstep answer chain; realtime callbacks take the
+        # message info (the publisher's identity)
+        realtime = self.clock_mode == "realtime"
+        self.driver_sub = self.create_subscription(
+            msg(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
+            self._on_driver_from if realtime else self._on_driver, topics.STREAM_QOS, raw=True)
+        self.cmd_sub = self.create_subscription(
+            msg(topics.REAR_STEER_CMD), topics.REAR_STEER_CMD,
+            self._on_cmd_from if realtime else self._on_cmd, topics.STREAM_QOS, raw=True)
         self.create_subscription(msg(topics.MANEUVER_STATUS), topics.MANEUVER_STATUS,
                                  self._on_maneuver_status, topics.STATUS_QOS)
         self.create_subscription(msg(topics.RECORDER_STATUS), topics.RECORDER_STATUS,
                                  self._on_recorder_status, topics.STATUS_QOS)
-        self.window = FlowWindow(int(self._param("recorder_window")), _FLOW_TOPICS)
         self._recorder = reporting.RecorderWatch(self, subscribe=False)
+        self._recorder_seen = int(self._param("recorder_window")) == 0
+        self._names = PublisherNames(self)
+        self.peers = peers.PeerWatch(self, float(self._param("startup_timeout_s")))
+        state_subscribers = self.matched.expected.get(
+            topics.STATE, int(self._param("expected_state_subscribers")))
+        self.peers.need_subscribers(self.state_pub, topics.STATE, state_subscribers)
+        if state_subscribers:
+            self.peers.need_publishers(self.driver_sub, topics.DRIVER_INPUT)
+            self.peers.need_publishers(self.cmd_sub, topics.REAR_STEER_CMD)
         # state, odometry, IMU and clock go out as CDR bytes written straight from the outputs
         # (fourws_run.codecs), not through Python messages: a shorter lockstep tick, and less
         # time holding the GIL in the realtime thread
@@ -261,13 +279,29 @@ class SimulatorNode(Node):
         self._config_pub = reporting.publish_node_config(self, self.counts,
                                                          topics.Role.SIMULATOR, config)
 
-    _LIVE = ("viz_period_s", "status_period_s", "command_timeout_s", "driver_timeout_s",
-             "initial_speed_mps")
+    def _make_clock(self) -> LockstepClock | RealtimeClock:
+        """The clock mode's object, with a fresh engine state and answer book."""
+        self.engine.reset(float(self._cfg["initial_speed_mps"]))
+        self._next_viz_s = 0.0
+        self._next_status_s = 0.0
+        common = dict(engine=self.engine, sink=self, limits=self.limits)
+        if self.clock_mode == "lockstep":
+            return make_clock("lockstep", **common,
+                              window=FlowWindow(int(self._param("recorder_window")),
+                                                FLOW_TOPICS),
+                              sent_counts=self._sent_counts,
+                              answer_timeout_s=lambda: float(self._cfg["answer_timeout_s"]))
+        return make_clock("realtime", **common, state_steps=self.n_state,
+                          stale_after_s=lambda: (int(self._cfg["command_stale_periods"])
+                                                 * self.control_period_s),
+                          driver_timeout_s=lambda: float(self._cfg["driver_timeout_s"]),
+                          priority=int(self._param("realtime_priority")),
+                          warn=self.get_logger().warning)
 
     def _on_set(self, params: list[Any]) -> SetParametersResult:
         """Validate live changes (ranges are enforced by the descriptors); cache the values."""
         for p in params:
-            if p.name in self._LIVE and not (
+            if p.name in self._LIVE and p.name != "command_stale_periods" and not (
                     isinstance(p.value, float) and math.isfinite(p.value)):
                 return SetParametersResult(successful=False,
                                            reason=f"{p.name}: must be a finite float")
@@ -276,194 +310,43 @@ class SimulatorNode(Node):
                 self._cfg[p.name] = p.value
         return SetParametersResult(successful=True)
 
-    def _reset_state(self) -> None:
-        self.engine.reset(float(self._cfg["initial_speed_mps"]))
-        self.answers = LockstepAnswers(self.limits)
-        self.rt_answers = RealtimeAnswers(self.limits)
-        self.pacer = Pacer(self.dt_s)
-        self.stale_commands = 0
-        self.command_timed_out = False
-        self._next_viz_s = 0.0
-        self._next_status_s = 0.0
-        self._held: Tick | None = None  # lockstep: a tick held back by flow control
-        self._held_since = 0.0
-        self.held_s = 0.0  # lockstep: wall time spent waiting for the recorder
-        self._recorder_seen = self.window.window == 0
-        self.answer_wait_s = 0.0  # lockstep: wall time from state sent to both answers in
-        self.tick_work_s = 0.0  # lockstep: wall time integrating and publishing
-        self.ticks = 0
-        self._sent_at = 0.0
-        self._await_since = 0.0
-        self._reported_wait = False
-        self._final_sent = False
-        self._final_due = 0.0
-        self._started = False
-
-    @property
-    def rejections(self) -> Any:
-        """The refusals of the current mode's answer book."""
-        return self.answers.rejections if self.clock_mode == "lockstep" \
-            else self.rt_answers.rejections
-
-    def _book(self) -> LockstepAnswers | RealtimeAnswers:
-        return self.answers if self.clock_mode == "lockstep" else self.rt_answers
-
-    # ------------------------------------------------------------------ inputs
-    def _on_driver(self, raw: bytes) -> None:
+    # ------------------------------------------------------------------ the sink of the clock
+    def publish_tick(self, tick: Tick) -> bool:
+        """Publish ``tick``: state (first: the answers' critical path starts there), clock,
+        then odometry/IMU/status when due."""
         try:
-            stamp, cmd = codecs.parse_driver_input(raw)
-        except codecs.CodecError as exc:
-            self.rejections.add(topics.DRIVER_INPUT, "not a DriverInput", str(exc))
-            return
-        if self.clock_mode == "realtime":
-            with self._lock:
-                self.rt_answers.offer_driver(stamp, cmd)
-            return
-        if self.answers.offer_driver(stamp, cmd) and self.answers.complete:
-            self._lockstep_advance()
+            raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
+        except conversions.NonFiniteError as exc:
+            self.end(f"non-finite state at t = {tick.t:.4f} s: {exc}", True)
+            return False
+        self.state_pub.publish(raw)
+        self.clock_pub.publish(codecs.encode_clock(tick.t))
+        t = tick.t
+        if t >= self._next_viz_s - 1e-12:
+            self.odom_pub.publish(self._odom_encoder.encode(tick.outputs, tick.stamp_ns))
+            self.imu_pub.publish(self._imu_encoder.encode(tick.outputs, tick.stamp_ns))
+            self._next_viz_s = t + self._cfg["viz_period_s"]
+        if t >= self._next_status_s - 1e-12:
+            self._publish_status(t)
+            self._next_status_s = t + self._cfg["status_period_s"]
+        return True
 
-    def _on_cmd(self, raw: bytes) -> None:
-        try:
-            msg = codecs.parse_rear_steer_command(raw)
-        except codecs.CodecError as exc:
-            self.rejections.add(topics.REAR_STEER_CMD, "not a RearSteerCommand", str(exc))
-            return
-        if self.clock_mode == "realtime":
-            with self._lock:
-                self.rt_answers.offer_command(msg["state_step"], msg["state_stamp_ns"],
-                                              msg["angle_rad"])
-            return
-        if self.answers.offer_command(msg["state_step"], msg["state_stamp_ns"],
-                                      msg["angle_rad"]) and self.answers.complete:
-            self._lockstep_advance()
+    def report_wait(self, t: float) -> None:
+        """A tick has waited a second: a status says for what."""
+        self._publish_status(t)
 
-    def _on_maneuver_status(self, msg: Any) -> None:
-        if not msg.done or self.ended:
-            return
-        stamp = conversions.stamp_to_ns(msg.header.stamp)
-        if self.clock_mode == "lockstep":
-            # the maneuver ends the run instead of answering the state the simulator waits on
-            tick = self.answers.awaited
-            if tick is None or stamp != tick.stamp_ns:
-                self.rejections.add(topics.MANEUVER_STATUS, "done for no awaited state",
-                                    f"stamp {stamp} ns")
-                return
-        elif not self.rt_answers.was_published(stamp):
-            self.rejections.add(topics.MANEUVER_STATUS, "done for no published state",
-                                f"stamp {stamp} ns")
-            return
-        end = msg.event or "done"
-        self._end(f"maneuver {msg.maneuver!r} {end}")
-
-    def _on_recorder_status(self, msg: Any) -> None:
-        self._recorder.update(msg)
-        self.window.update(self._recorder.stored or {})
-        if self.ended:
-            self._try_final()
-            return
-        self._recorder_seen = True
-        held = self._held
-        if held is not None and not self._holding_back():
-            self._send_tick(held)
-
-    # ------------------------------------------------------------------ services
-    def _on_reset(self, _request: Any, response: Any) -> Any:
-        if self.clock_mode == "realtime" and self._rt_thread is not None:
-            response.success = False
-            response.message = "pause the realtime simulation before a reset"
-            return response
-        with self._lock:
-            self._reset_state()
-            self.ended = ""
-        response.success = True
-        response.message = f"reset to {self._param('initial_speed_mps')} m/s at t = 0"
-        if not self.paused:
-            self._start()
-        return response
-
-    def _on_pause(self, request: Any, response: Any) -> Any:
-        pause = bool(request.data)
-        if pause and not self.paused:
-            self.paused = True
-            self._stop_rt_thread()
-        elif not pause and self.paused:
-            self.paused = False
-            if self.clock_mode == "lockstep" and self._started:
-                if self.answers.complete:  # answers that came while paused count now
-                    self._lockstep_advance()
-            else:
-                self._start()
-        response.success = True
-        response.message = "paused" if self.paused else "running"
-        return response
-
-    # ------------------------------------------------------------------ running
-    def _housekeeping(self) -> None:
-        if self.ended:
-            self._try_final()
-            return
-        if self.paused:
-            return
-        if not self._started:
-            self._start()
-            return
-        if self.clock_mode == "lockstep":
-            self._report_long_wait()
-            tick = self.answers.awaited
-            if tick is not None and time.monotonic() - self._await_since \
-                    > self._cfg["command_timeout_s"]:
-                # Lockstep never runs a tick on inputs other than the answers (a slow
-                # machine must not change the numbers): an answer this late means a node
-                # has stopped working, and the run stops, naming it.
-                missing = self.answers.waiting_for
-                self._end(f"no {missing} for the state at t = {tick.t:.2f} s within "
-                          f"{self._cfg['command_timeout_s']:g} s (wall time); "
-                          + self._silent_node(missing) + " stopped answering", failed=True)
-
-    def _silent_node(self, missing: str) -> str:
-        """The node whose answer is missing: the maneuver's driver input comes first (the
-        controller waits for it), so a missing driver input names the maneuver node."""
-        if "driver" in missing:
-            return f"the maneuver node ({topics.NODE_NAMES[topics.Role.MANEUVER]})"
+    def silent_node(self, missing: str) -> str:
+        """The node whose answer is missing, by its ROS name."""
+        if missing == DRIVER_INPUT:
+            return f"the maneuver node ({self._param('maneuver_node')})"
         return f"the controller node ({self._param('controller_node')})"
 
-    def _report_long_wait(self) -> None:
-        """A tick (or a held tick) waiting over a second: publish a status saying for what,
-        so a stalled run names the node (the periodic statuses are sent as ticks go out)."""
-        tick = self.answers.awaited or self._held
-        if tick is not None and not self._reported_wait and \
-                time.monotonic() - (self._await_since if self._held is None
-                                    else self._held_since) > 1.0:
-            self._reported_wait = True
-            self._publish_status(tick.t)
-
-    def _graph_ready(self) -> bool:
-        need = int(self._param("expected_state_subscribers"))
-        return (self.state_pub.get_subscription_count() >= need
-                and (need == 0 or (self.driver_sub.get_publisher_count() >= 1
-                                   and self.cmd_sub.get_publisher_count() >= 1))
-                and self._recorder_seen and self.matched.ready())
-
-    def _start(self) -> None:
-        if self.ended or self._started and self.clock_mode == "lockstep":
-            return
-        if not self._graph_ready():
-            return  # housekeeping tries again
-        self._started = True
-        if self.clock_mode == "lockstep":
-            self._publish_tick(self.engine.tick)
-        else:
-            self._rt_thread = threading.Thread(target=self._realtime_loop, daemon=True)
-            self._rt_thread.start()
-
-    def _end(self, reason: str, failed: bool = False) -> None:
+    def end(self, reason: str, failed: bool) -> None:
         """The simulation ends: final status, then (``exit_when_done``) deliver and exit."""
         if self.ended:
             return
         self.ended = reason
-        self.paused = True
-        if threading.current_thread() is not self._rt_thread:
-            self._stop_rt_thread()
+        self.clock.pause()
         if failed:
             self.stop_reason = reason
             self.get_logger().error(f"run stopped: {reason}")
@@ -471,6 +354,122 @@ class SimulatorNode(Node):
             self.get_logger().info(f"run ended: {reason}")
         self._final_due = time.monotonic()
         self._try_final()
+
+    def _sent_counts(self) -> dict[str, int]:
+        sent = dict(self.counts.counts)
+        sent[topics.DRIVER_INPUT] = self.clock.book.driver_inputs_accepted
+        sent[topics.REAR_STEER_CMD] = self.clock.book.commands_accepted
+        return sent
+
+    # ------------------------------------------------------------------ inputs
+    def _from(self, topic: str, info: Any, role_param: str) -> bool:
+        """Realtime: whether a message comes from the run's node ``role_param`` names (a
+        foreign one is refused and counted)."""
+        node = self._names.of(topic, info)
+        if node == self._param(role_param):
+            return True
+        self.clock.rejections.add(topic, "not from the run's node",
+                                  f"publisher {node or '(unknown)'}")
+        return False
+
+    def _on_driver(self, raw: bytes) -> None:
+        try:
+            stamp, cmd = codecs.parse_driver_input(raw)
+        except codecs.CodecError as exc:
+            self.clock.rejections.add(topics.DRIVER_INPUT, "not a DriverInput", str(exc))
+            return
+        self.clock.offer_driver(stamp, cmd)
+
+    def _on_driver_from(self, raw: bytes, info: Any) -> None:
+        if self._from(topics.DRIVER_INPUT, info, "maneuver_node"):
+            self._on_driver(raw)
+
+    def _on_cmd(self, raw: bytes) -> None:
+        try:
+            msg = codecs.parse_rear_steer_command(raw)
+        except codecs.CodecError as exc:
+            self.clock.rejections.add(topics.REAR_STEER_CMD, "not a RearSteerCommand", str(exc))
+            return
+        self.clock.offer_command(msg["state_step"], msg["state_stamp_ns"], msg["angle_rad"])
+
+    def _on_cmd_from(self, raw: bytes, info: Any) -> None:
+        if self._from(topics.REAR_STEER_CMD, info, "controller_node"):
+            self._on_cmd(raw)
+
+    def _on_maneuver_status(self, msg: Any) -> None:
+        if not msg.done or self.ended:
+            return
+        stamp = conversions.stamp_to_ns(msg.header.stamp)
+        # lockstep: the maneuver ends the run instead of answering the awaited state;
+        # realtime: it must name a published state
+        if not self.clock.is_awaited(stamp):
+            self.clock.rejections.add(topics.MANEUVER_STATUS, "done for no awaited state",
+                                      f"stamp {stamp} ns")
+            return
+        self.end(f"maneuver {msg.maneuver!r} {msg.event or 'done'}", False)
+
+    def _on_recorder_status(self, msg: Any) -> None:
+        self._recorder.update(msg)
+        self._recorder_seen = True
+        if self.ended:
+            self._try_final()
+            return
+        self.clock.recorder_stored(self._recorder.stored or {})
+
+    # ------------------------------------------------------------------ services
+    def _on_reset(self, _request: Any, response: Any) -> Any:
+        if isinstance(self.clock, RealtimeClock) and self.clock.started \
+                and not self.clock.paused:
+            response.success = False
+            response.message = "pause the realtime simulation before a reset"
+            return response
+        self.clock = self._make_clock()
+        self.ended = ""
+        self.stop_reason = ""
+        self._final_sent = False
+        response.success = True
+        response.message = f"reset to {self._param('initial_speed_mps')} m/s at t = 0"
+        return response
+
+    def _on_pause(self, request: Any, response: Any) -> Any:
+        pause = bool(request.data)
+        self._run_wanted = not pause
+        if pause:
+            self.clock.pause()
+        elif self.clock.started and not self.ended:
+            self.clock.resume()
+        # (not started yet: housekeeping starts it once the graph is complete)
+        response.success = True
+        response.message = "paused" if pause else "running"
+        return response
+
+    # ------------------------------------------------------------------ running
+    def _housekeeping(self) -> None:
+        if self.ended:
+            self._try_final()
+            return
+        clock = self.clock
+        if not clock.started:
+            why = self.peers.check_startup()
+            if why:
+                self.end(why, True)
+            elif self._run_wanted and self._graph_ready():
+                clock.resume()
+            return
+        if clock.paused:
+            return
+        gone = self.peers.gone()
+        if gone:
+            self.end(f"{gone}; {self._waiting_text()}".rstrip("; "), True)
+            return
+        clock.housekeeping()
+
+    def _waiting_text(self) -> str:
+        waiting = self.clock.waiting_for()
+        return f"the simulation waited for {waiting}" if waiting else ""
+
+    def _graph_ready(self) -> bool:
+        return self.peers.ready() and self._recorder_seen and self.matched.ready()
 
     def _try_final(self) -> None:
         """Send the final status once the recorder holds everything the run sent (so a node
@@ -490,86 +489,18 @@ class SimulatorNode(Node):
         watch = self._recorder
         if watch.stored is None or watch.silent():
             return False
-        book = self._book()
-        sent = dict(self.counts.counts)
-        sent[topics.DRIVER_INPUT] = book.driver_inputs_accepted
-        sent[topics.REAR_STEER_CMD] = book.commands_accepted
-        return any(sent.get(t, 0) > watch.stored[t] for t in _FLOW_TOPICS
+        sent = self._sent_counts()
+        return any(sent.get(t, 0) > watch.stored[t] for t in FLOW_TOPICS
                    if t in watch.stored and t != topics.SIM_STATUS)
 
-    # -- lockstep
-    def _holding_back(self) -> str:
-        sent = dict(self.counts.counts)
-        sent[topics.DRIVER_INPUT] = self.answers.driver_inputs_accepted
-        sent[topics.REAR_STEER_CMD] = self.answers.commands_accepted
-        return self.window.holding_back(sent)
-
-    def _publish_tick(self, tick: Tick) -> None:
-        if self._holding_back():
-            self._held = tick  # the recorder's next status releases it
-            self._held_since = time.monotonic()
-            self._reported_wait = False
-            return
-        self._send_tick(tick)
-
-    def _send_tick(self, tick: Tick) -> None:
-        if self._held is not None:
-            self.held_s += time.monotonic() - self._held_since
-        self._held = None
-        try:
-            raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
-        except conversions.NonFiniteError as exc:
-            self._end(f"non-finite state at t = {tick.t:.4f} s: {exc}", failed=True)
-            return
-        self.answers.expect(tick)
-        self._await_since = time.monotonic()
-        self._reported_wait = False
-        self._sent_at = time.perf_counter()
-        self.state_pub.publish(raw)  # first: the answers' critical path starts here
-        self.clock_pub.publish(codecs.encode_clock(tick.t))
-        self._publish_side(tick)
-
-    def _lockstep_advance(self) -> None:
-        if self.paused or self.ended or self.answers.awaited is None \
-                or self.answers.driver is None:
-            return
-        now = time.perf_counter()
-        self.answer_wait_s += now - self._sent_at
-        tick = self.answers.awaited
-        driver, rear, timed_out = self.answers.close()
-        self.command_timed_out = timed_out
-        if timed_out:
-            self.stale_commands += 1
-            self.get_logger().warning(
-                f"no rear-steer command for step {tick.step} (t = {tick.t:.2f} s) in time: "
-                f"zero rear steer ({self.stale_commands} ticks so far)",
-                throttle_duration_sec=1.0)
-        self.ticks += 1
-        if self.engine.advance(driver, rear):
-            self._publish_tick(self.engine.tick)
-        else:
-            self._end(self.engine.diverged, failed=True)
-        self.tick_work_s += time.perf_counter() - now
-
-    def _publish_side(self, tick: Tick) -> None:
-        """Odometry and IMU (every ``viz_period_s``) and status (every ``status_period_s``)
-        of the state just published."""
-        t = tick.t
-        if t >= self._next_viz_s - 1e-12:
-            self.odom_pub.publish(self._odom_encoder.encode(tick.outputs, tick.stamp_ns))
-            self.imu_pub.publish(self._imu_encoder.encode(tick.outputs, tick.stamp_ns))
-            self._next_viz_s = t + self._cfg["viz_period_s"]
-        if t >= self._next_status_s - 1e-12:
-            self._publish_status(t)
-            self._next_status_s = t + self._cfg["status_period_s"]
-
     def _publish_status(self, t: float, final: bool = False) -> None:
-        book = self._book()
+        clock = self.clock
+        book = clock.book
+        pacer = clock.pacer
         msg = topics.message_class(topics.SIM_STATUS)()
         conversions.set_stamp(msg.header.stamp, max(t, 0.0))
         msg.clock_mode = self.clock_mode
         msg.sim_time_s = float(t)
-        pacer = self.pacer
         msg.step_lateness_s = float(pacer.lateness_s)
         msg.max_lateness_s = float(pacer.max_lateness_s)
         msg.p99_lateness_s = pacer.percentile(99.0)
@@ -578,117 +509,25 @@ class SimulatorNode(Node):
         overruns = pacer.take_overruns()
         msg.overrun_times_s = [o[0] for o in overruns]
         msg.overrun_lateness_s = [o[1] for o in overruns]
-        msg.stale_commands = int(self.stale_commands)
-        msg.command_timed_out = bool(self.command_timed_out)
-        msg.running = not (final or self.paused)
+        msg.stale_commands = int(clock.stale_commands)
+        msg.command_timed_out = bool(clock.command_timed_out)
+        msg.running = not (final or clock.paused)
         msg.stop_reason = self.stop_reason
         msg.end_reason = self.ended if final else ""
-        msg.waiting_for = self._waiting_for()
+        msg.waiting_for = "" if self.ended else clock.waiting_for()
         msg.driver_inputs_accepted = int(book.driver_inputs_accepted)
         msg.commands_accepted = int(book.commands_accepted)
         msg.late_commands = int(book.late_commands)
         msg.final = final
         reporting.publish_counted_status(self.status_pub, msg, self.counts, book.rejections)
 
-    def _waiting_for(self) -> str:
-        if self.ended:
-            return ""
-        if self.clock_mode == "lockstep":
-            if self._held is not None:
-                return f"recorder ({self._holding_back()})"
-            missing = self.answers.waiting_for
-            return {"driver input": "driver input (maneuver node)",
-                    "rear-steer command": "rear-steer command (controller node)"}.get(
-                        missing, missing.replace("driver input", "driver input (maneuver "
-                                                 "node)"))
-        age = self.engine.sim.time_s - self.rt_answers.driver_time_s
-        return "driver input (maneuver node)" if age > self._cfg["command_timeout_s"] else ""
-
-    # -- realtime
-    def _realtime_loop(self) -> None:
-        # Objects alive now (modules, numba, rclpy) leave the collector's generations, so a
-        # full collection during the run has little to scan (it holds the GIL meanwhile).
-        gc.collect()
-        gc.freeze()
-        _make_thread_realtime(int(self._param("realtime_priority")), self.get_logger())
-        old_interval = sys.getswitchinterval()
-        sys.setswitchinterval(_SWITCH_INTERVAL_S)
-        try:
-            self._realtime_run()
-        finally:
-            sys.setswitchinterval(old_interval)
-
-    def _realtime_run(self) -> None:
-        engine, book, pacer = self.engine, self.rt_answers, self.pacer
-        sim = engine.sim
-        pacer.start(sim.time_s)
-        k = 0
-        rear = 0.0
-        driver = book.driver
-        while not self.paused and not self.ended:
-            pacer.wait(sim.time_s)
-            with self._lock:
-                if k % self.n_control == 0:
-                    t = sim.time_s
-                    rear, timed_out = book.rear_at(t, float(self._cfg["command_timeout_s"]))
-                    # at the start a controller gets one timeout to send its first command
-                    timed_out = timed_out and (book.commands_accepted > 0
-                                               or t > self._cfg["command_timeout_s"])
-                    self.stale_commands += timed_out
-                    self.command_timed_out = timed_out
-                    driver = book.driver
-                    quiet = t - max(book.driver_time_s, 0.0)
-                    if quiet > self._cfg["driver_timeout_s"]:
-                        self._end(f"no driver input for {quiet:.2f} s of simulation time at "
-                                  f"t = {t:.2f} s: {self._silent_node('driver')} stopped "
-                                  "answering",
-                                  failed=True)
-                        return
-                if not engine.advance(driver, rear, n_steps=1):
-                    self._end(engine.diverged, failed=True)
-                    return
-                k += 1
-                if k % self.n_state == 0:
-                    tick = engine.tick
-                    try:
-                        raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
-                    except conversions.NonFiniteError as exc:
-                        self._end(f"non-finite state at t = {tick.t:.4f} s: {exc}",
-                                  failed=True)
-                        return
-                    book.published(tick)
-                    self.state_pub.publish(raw)
-                    self.clock_pub.publish(codecs.encode_clock(tick.t))
-                    self._publish_side(tick)
-
-    def _stop_rt_thread(self) -> None:
-        thread = self._rt_thread
-        if thread is not None:
-            thread.join(timeout=2.0)
-            self._rt_thread = None
-            self._started = False
-
     def on_shutdown(self, executor: Any) -> None:
         """Stop the realtime thread, publish the final status if the run did not end, log the
         timing, and wait until every subscriber has what was published."""
-        self.paused = True
-        self._stop_rt_thread()
-        pacer = self.pacer
-        if self.clock_mode == "realtime" and self.engine.sim.step_count:
-            self.get_logger().info(
-                f"realtime: {self.engine.sim.step_count} steps, step lateness p99 "
-                f"{pacer.percentile(99.0) * 1e3:.3f} ms, max "
-                f"{pacer.max_lateness_s * 1e3:.3f} ms at t = {pacer.max_lateness_at_s:.3f} s, "
-                f"{pacer.overruns} overruns"
-                + (" (t/late ms: " + ", ".join(f"{t:.3f}/{late * 1e3:.2f}"
-                                               for t, late in pacer.first_overruns) + ")"
-                   if pacer.first_overruns else ""))
-        if self.clock_mode == "lockstep" and self.ticks:
-            self.get_logger().info(
-                f"lockstep: {self.ticks} ticks, mean answer wait "
-                f"{self.answer_wait_s / self.ticks * 1e3:.3f} ms, mean own work "
-                f"{self.tick_work_s / self.ticks * 1e3:.3f} ms per tick; waited for the "
-                f"recorder {self.window.holds} times, {self.held_s:.3f} s in all")
+        self.clock.pause()
+        summary = self.clock.summary()
+        if summary:
+            self.get_logger().info(summary)
         if not self.ended:
             self.ended = "stopped before the maneuver was done (signal)"
         if not self._final_sent:
@@ -696,22 +535,6 @@ class SimulatorNode(Node):
             self._publish_status(self.engine.sim.time_s, final=True)
         reporting.wait_delivered(self.counts, self.get_logger(), executor, self._recorder,
                                  reporting.delivery_timeout(self))
-
-
-def _make_thread_realtime(priority: int, logger: Any) -> None:
-    """SCHED_FIFO for the calling thread and 1 ns timer slack (sleep wakes on time)."""
-    pr_set_timerslack = 29
-    try:
-        ctypes.CDLL(None).prctl(pr_set_timerslack, 1, 0, 0, 0)
-    except (OSError, AttributeError):
-        pass
-    if priority <= 0:
-        return
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-    except (PermissionError, OSError) as exc:
-        logger.warning(f"realtime priority {priority} not granted ({exc}); running with normal "
-                       "scheduling, expect more step lateness under load")
 
 
 def main(args: list[str] | None = None) -> int:

@@ -9,11 +9,26 @@ reads ``topics.STATE``.
 
 QoS choice (why):
 
-* ``STREAM_QOS`` (state, driver input, rear-steer command, odometry, IMU, clock): reliable,
-  keep last :data:`STREAM_DEPTH`. Lockstep runs must not lose a single message: the simulator
-  waits for the answers to each state, and it never runs more than the flow-control window
-  (:data:`fourws_ros.node_params.RECORDER_WINDOW`, well below this depth) ahead of what the
-  recorder has stored, so no message can be pushed out of a queue before it is recorded.
+* ``STREAM_QOS`` (state, driver input, rear-steer command, odometry, IMU): reliable,
+  **transient local**, keep last :data:`STREAM_DEPTH`. Lockstep runs must not lose a single
+  message: the simulator waits for the answers to each state, and it never runs more than the
+  flow-control window (:data:`fourws_ros.node_params.RECORDER_WINDOW`, well below this depth)
+  ahead of what the recorder has stored, so no message can be pushed out of a queue before it
+  is recorded. Durability makes delivery independent of discovery order: a volatile writer
+  sends a message only to the readers it has matched when it writes, and never again to one it
+  matches later, while a transient-local writer hands a late-matched transient-local reader its
+  history. The graph lists a subscription before its writers have matched it (under load for
+  seconds), so with volatile streams a first state, driver input or command could leave before
+  the recorder's or the controller's reader was matched, and never arrive (a lockstep run then
+  stalls at t = 0). Every fourws reader of these topics is transient local, so no node -- a
+  user's controller or driver written from the contracts included -- needs to know who else is
+  on the graph before its first message. A user's *reader* may stay volatile (compatible); the
+  built-in writers also hold their first message until their subscribers have matched
+  (:class:`fourws_ros.reporting.MatchWait`), which covers such readers. A user's *writer* must be
+  transient local: a volatile one cannot match the transient-local readers (the simulator says
+  so, naming the topic and the node).
+* ``CLOCK_QOS`` (``/clock``): reliable, volatile: a late ``use_sim_time`` node must start at the
+  current time, not replay the past.
 * ``STATUS_QOS`` (simulator, maneuver and recorder status): reliable, keep last
   :data:`STATUS_DEPTH` -- the events (``done``, final counts) must arrive.
 * ``LATCHED_QOS`` (run and node configuration): reliable, transient local, depth 1 per
@@ -39,14 +54,16 @@ STATUS_DEPTH = 1000
 
 STREAM_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STREAM_DEPTH,
                         reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.VOLATILE)
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
 STATUS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STATUS_DEPTH,
                         reliability=ReliabilityPolicy.RELIABLE,
                         durability=DurabilityPolicy.VOLATILE)
 LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
-CLOCK_QOS = STREAM_QOS
+CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STREAM_DEPTH,
+                       reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE)
 #: What a recorder subscribes latched topics with: transient local like the publishers, but a
 #: deep history, since several nodes publish on one latched topic (``/fourws/node_config``)
 #: and a depth-1 reader would keep only the last of them.

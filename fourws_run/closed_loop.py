@@ -90,6 +90,10 @@ class ClosedLoopResult:
     end_reason : str
         ``duration``, the maneuver's end or abort reason, ``max_ticks``, or ``the simulation
         diverged at t = ...`` (:attr:`diverged`).
+    end_kind : str
+        How the maneuver ended (:attr:`fourws_sim.maneuvers.Maneuver.end_kind`:
+        ``completed``, ``end_condition``, ``aborted``, ``spun``, ``diverged``), ``diverged``
+        when the simulation diverged, ``max_ticks`` when the guard stopped it.
     config : dict
         The run configuration (vehicle, maneuver mapping, law, rates).
     """
@@ -107,6 +111,7 @@ class ClosedLoopResult:
     maneuver: str
     end_reason: str = "duration"
     config: dict[str, Any] = field(default_factory=dict)
+    end_kind: str = "completed"
 
     @property
     def diverged(self) -> bool:
@@ -204,6 +209,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     rear: list[float] = []
     phases: list[str] = []
     end_reason = "duration"
+    end_kind = "completed"
     limit = max_ticks if max_ticks is not None else int(
         math.ceil(man.duration_s / control_period_s)) + 1
     tick = engine.tick
@@ -211,6 +217,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         t, y = tick.t, tick.outputs
         if man.done(t, y):
             end_reason = man.abort_reason or "duration"
+            end_kind = man.end_kind
             break
         answers.expect(tick)
         # the maneuver node's answer ...
@@ -235,11 +242,11 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         rear.append(applied)
         phases.append(man.phase(t))
         if not engine.advance(d, applied):
-            end_reason = engine.diverged
+            end_reason, end_kind = engine.diverged, "diverged"
             break
         tick = engine.tick
     else:
-        end_reason = "max_ticks"
+        end_reason = end_kind = "max_ticks"
     y = tick.outputs
 
     if not rows:
@@ -263,7 +270,7 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         time_s=np.asarray(times), outputs=outputs, driver=driver,
         rear_law_rad=np.asarray(law_cmds), rear_angle_rad=np.asarray(rear), phase=phases,
         final_outputs=dict(y), law=law_name, model=model, vehicle=vehicle.name,
-        maneuver=man.name, end_reason=end_reason, config=config)
+        maneuver=man.name, end_reason=end_reason, config=config, end_kind=end_kind)
 
 
 def run_twin(config: RunConfig, max_ticks: int | None = None) -> ClosedLoopResult:

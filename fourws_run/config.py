@@ -16,7 +16,8 @@ Serialized layout (``to_dict``, JSON-ready, ``version`` 2): ``vehicle`` and ``be
 as vehicle-file mappings, ``maneuver`` as a maneuver-file mapping, ``law``, ``law_options``,
 ``controller`` (``command``, ``node_name``), ``model``, ``tire``, ``integrator``,
 ``integration_step_s``, ``control_period_s``, ``state_period_s``, ``clock_mode``,
-``speed_mps``, ``scenario`` (its name), ``recorded_topics``, ``versions``. Version 1 (bags
+``speed_mps``, ``scenario`` (its name), ``recorded_topics``, ``versions``, ``realtime``
+(:class:`RealtimeDemand`; absent in older bags: the defaults). Version 1 (bags
 recorded before the typed description; no ``version`` key, the belief sometimes a name) still
 loads.
 """
@@ -34,7 +35,8 @@ from typing import Any, Mapping
 from fourws_run import interface
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import ManeuverSpec, maneuver_spec_from_mapping
-from fourws_sim.params import Vehicle, load_vehicle, vehicle_from_mapping
+from fourws_sim.params import (Vehicle, dataclass_from_mapping, declare_field, load_vehicle,
+                               vehicle_from_mapping)
 
 #: Layout version written by :meth:`RunConfig.to_dict`.
 RUN_CONFIG_VERSION = 2
@@ -100,6 +102,49 @@ class ControllerSpec:
         return cls(tuple(command), str(name))
 
 
+@dataclass(frozen=True)
+class RealtimeDemand:
+    """What a realtime run must achieve to be ``ok`` (scenario key ``realtime``).
+
+    A realtime run cannot wait for a late command: a control tick without a command that
+    answers a state of the last ``command_stale_periods`` control periods applies zero rear
+    steer (the simulator's ``command_stale_periods``). A few such ticks on a loaded machine
+    are a fact of wall-clock running, a controller that stopped answering or sends unusable
+    commands is a failed run: above ``max_stale_share`` of the ticks stale, or of the commands
+    refused, the run fails naming the controller. ``min_realtime_factor`` demands a pace:
+    a run that simulated less than this per wall time fails (0: none demanded; a run that fell
+    behind real time is said so either way). Lockstep runs ignore both: they never substitute
+    an input and have no pace.
+    """
+
+    min_realtime_factor: float = declare_field(
+        "nonnegative", default=0.0,
+        doc="simulated time per wall time a realtime run must reach, 1 (0: no demand)",
+        bounds=(0.0, 1.0))
+    max_stale_share: float = declare_field(
+        "fraction", default=0.01,
+        doc="largest share of control ticks run without a fresh command, and of commands "
+            "refused, 1", bounds=(0.0, 1.0))
+
+    def to_dict(self) -> dict[str, float]:
+        """The file layout."""
+        return {"min_realtime_factor": self.min_realtime_factor,
+                "max_stale_share": self.max_stale_share}
+
+    @classmethod
+    def from_mapping(cls, data: Any, source: str | None = None) -> "RealtimeDemand":
+        """Validate a ``realtime`` mapping (None: the defaults).
+
+        Raises
+        ------
+        ParameterError
+            Unknown key, a value that is not a number in range.
+        """
+        if data is None:
+            return cls()
+        return dataclass_from_mapping(cls, data, source, "realtime.")
+
+
 def check_node_name(name: Any, field_name: str, source: str | None = None) -> str:
     """A valid ROS node name (letters, digits, underscores; not starting with a digit).
 
@@ -140,6 +185,8 @@ class RunConfig:
         Name of the scenario it came from ('' if none).
     recorded_topics : tuple of str
         The topics the bag records (empty: not recorded).
+    realtime : RealtimeDemand
+        What a realtime run must achieve to be ``ok``.
     versions : mapping
         Software versions the run used.
     """
@@ -160,6 +207,7 @@ class RunConfig:
     scenario: str = ""
     recorded_topics: tuple[str, ...] = interface.RECORDED_TOPICS
     versions: Mapping[str, str] = field(default_factory=dict)
+    realtime: RealtimeDemand = field(default_factory=RealtimeDemand)
 
     @property
     def speed_mps(self) -> float:
@@ -208,6 +256,7 @@ class RunConfig:
             "controller_period_s": self.controller_period_s, "speed_mps": self.speed_mps,
             "scenario": self.scenario,
             "recorded_topics": list(self.recorded_topics), "versions": dict(self.versions),
+            "realtime": self.realtime.to_dict(),
         }
 
     @classmethod
@@ -252,7 +301,8 @@ class RunConfig:
             clock_mode=str(data.get("clock_mode", "lockstep")),
             controller=ControllerSpec.from_mapping(data.get("controller"), source),
             scenario=str(scenario), recorded_topics=tuple(topics),
-            versions={str(k): str(v) for k, v in dict(data.get("versions") or {}).items()})
+            versions={str(k): str(v) for k, v in dict(data.get("versions") or {}).items()},
+            realtime=RealtimeDemand.from_mapping(data.get("realtime"), source))
 
     @classmethod
     def from_node_configs(cls, parts: list[Mapping[str, Any]],
@@ -317,5 +367,6 @@ def software_versions() -> dict[str, str]:
     return versions
 
 
-__all__ = ["ControllerSpec", "RUN_CONFIG_VERSION", "RunConfig", "USER_LAW", "check_node_name",
+__all__ = ["ControllerSpec", "RUN_CONFIG_VERSION", "RealtimeDemand", "RunConfig", "USER_LAW",
+           "check_node_name",
            "software_versions"]

@@ -32,8 +32,11 @@ class Outcome(str, enum.Enum):
     #: The car or the driver could not do the maneuver (it spun, left the path); the bag is
     #: complete up to there. A vehicle-dynamics result, not a fault.
     ABORTED = "aborted"
-    #: The simulation diverged (the model was driven past what it can represent); the bag is
-    #: complete up to there.
+    #: The car spun or drove backwards (:class:`fourws_sim.outcome.VehicleLimits`): the run
+    #: ended there, the bag is complete up to there; its metrics describe a spin, not the car.
+    SPUN = "spun"
+    #: The simulation diverged, or the car left the states the model represents (the model
+    #: was driven past what it can represent); the bag is complete up to there.
     DIVERGED = "diverged"
     #: A node failed, the run stalled, or the bag does not hold every message.
     FAILED = "failed"
@@ -43,8 +46,11 @@ class Outcome(str, enum.Enum):
 
 #: Exit code of ``fourws run`` for a run's outcome.
 EXIT_CODES: dict[Outcome, int] = {
-    Outcome.COMPLETED: 0, Outcome.FAILED: 1, Outcome.ABORTED: 3, Outcome.DIVERGED: 3,
-    Outcome.INTERRUPTED: 130}
+    Outcome.COMPLETED: 0, Outcome.FAILED: 1, Outcome.ABORTED: 3, Outcome.SPUN: 3,
+    Outcome.DIVERGED: 3, Outcome.INTERRUPTED: 130}
+#: A realtime run that simulated less than this per wall time fell behind real time (it
+#: says so; a scenario's ``realtime.min_realtime_factor`` may fail it).
+BEHIND_REAL_TIME = 0.99
 
 
 @dataclass
@@ -67,6 +73,10 @@ class RunRecord:
         Realtime steps that started a whole step late.
     stale_commands : int
         Control ticks run with zero rear steer (no valid command in time).
+    control_ticks : int
+        Control ticks the simulator ran.
+    clock_mode : str
+        ``lockstep`` or ``realtime``.
     account : RunAccount or None
         The recording's accounting (None when not recorded, or the recorder never reported).
     rejections : dict of str to int
@@ -92,6 +102,8 @@ class RunRecord:
     p99_lateness_s: float = 0.0
     overruns: int = 0
     stale_commands: int = 0
+    control_ticks: int = 0
+    clock_mode: str = "lockstep"
     account: RunAccount | None = None
     rejections: dict[str, int] = field(default_factory=dict)
     message_counts: dict[str, int] = field(default_factory=dict)
@@ -120,19 +132,31 @@ class RunRecord:
         return self.sim_time_s / self.wall_time_s if self.wall_time_s > 0.0 else 0.0
 
     @property
+    def behind_real_time(self) -> bool:
+        """A realtime run that simulated less than :data:`BEHIND_REAL_TIME` per wall time, or
+        had steps a whole step late."""
+        return self.clock_mode == "realtime" and self.wall_time_s > 0.0 and (
+            self.realtime_factor < BEHIND_REAL_TIME or self.overruns > 0)
+
+    @property
     def complete(self) -> bool:
         """The bag holds every message the run published (False when not recorded)."""
         return self.account is not None and self.account.complete
 
     def summary_lines(self) -> list[str]:
         """What ``fourws run`` prints for this run."""
-        head = {Outcome.COMPLETED: "ok", Outcome.ABORTED: "ABORTED",
+        head = {Outcome.COMPLETED: "ok", Outcome.ABORTED: "ABORTED", Outcome.SPUN: "SPUN",
                 Outcome.DIVERGED: "DIVERGED", Outcome.FAILED: "FAILED",
                 Outcome.INTERRUPTED: "INTERRUPTED"}[self.outcome]
-        lines = [f"run {self.law}: {head}" + (f": {self.reason}" if not self.ok else "")]
+        behind = ""
+        if self.behind_real_time:
+            behind = (f" (behind real time: {self.realtime_factor:.2f}x, "
+                      f"{self.overruns} overruns)")
+        lines = [f"run {self.law}: {head}" + (f": {self.reason}" if not self.ok else "")
+                 + behind]
         if self.wall_time_s > 0.0:
             lines.append(f"  simulated {self.sim_time_s:.2f} s in {self.wall_time_s:.2f} s of "
-                         f"running (real-time factor {self.realtime_factor:.1f}x)")
+                         f"running (real-time factor {self.realtime_factor:.2f}x)")
         if self.max_lateness_s > 0.0:
             lines.append(f"  step lateness p99 {self.p99_lateness_s * 1e3:.3f} ms, max "
                          f"{self.max_lateness_s * 1e3:.3f} ms, overruns {self.overruns}")
@@ -145,6 +169,10 @@ class RunRecord:
             lines.append(f"  bag: {self.bag_path}")
             if self.account is None:
                 lines.append("  recording: no accounting (the recorder never reported)")
+            elif self.account.complete and self.outcome in (Outcome.FAILED,
+                                                            Outcome.INTERRUPTED):
+                lines.append("  recording: the bag holds every message the nodes published "
+                             "before the run stopped (the run itself did not end well)")
             else:
                 lines.append(f"  recording: {self.account.summary()}")
                 for what, n in sorted(self.account.foreign_publishers.items()):
@@ -163,7 +191,8 @@ class RunRecord:
             "sim_time_s": self.sim_time_s, "wall_time_s": self.wall_time_s,
             "realtime_factor": self.realtime_factor, "max_lateness_s": self.max_lateness_s,
             "p99_lateness_s": self.p99_lateness_s, "overruns": self.overruns,
-            "stale_commands": self.stale_commands,
+            "stale_commands": self.stale_commands, "control_ticks": self.control_ticks,
+            "clock_mode": self.clock_mode, "behind_real_time": self.behind_real_time,
             "recording": None if self.account is None else self.account.to_dict(),
             "rejections": dict(sorted(self.rejections.items())),
             "message_counts": dict(sorted(self.message_counts.items())),
@@ -185,6 +214,8 @@ class RunRecord:
             p99_lateness_s=float(data.get("p99_lateness_s", 0.0)),
             overruns=int(data.get("overruns", 0)),
             stale_commands=int(data.get("stale_commands", 0)),
+            control_ticks=int(data.get("control_ticks", 0)),
+            clock_mode=str(data.get("clock_mode", "lockstep")),
             account=None if rec is None else RunAccount.from_dict(rec),
             rejections={str(k): int(v) for k, v in dict(data.get("rejections", {})).items()},
             message_counts={str(k): int(v)
@@ -207,4 +238,4 @@ class RunRecord:
         return path
 
 
-__all__ = ["EXIT_CODES", "Outcome", "RECORD_VERSION", "RunRecord"]
+__all__ = ["BEHIND_REAL_TIME", "EXIT_CODES", "Outcome", "RECORD_VERSION", "RunRecord"]

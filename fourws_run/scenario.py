@@ -32,6 +32,14 @@ A scenario file (``config/scenarios/<name>.yaml``)::
                                   # file's tire.friction_coefficient (a test surface)
     series: regulation            # optional: several maneuvers per law, see fourws_run.series
                                   # ("regulation", or a list of maneuver-field mappings)
+    vehicle_limits:               # optional: when a run ends spun/diverged, replacing the
+      max_sideslip_rad: 0.349     # maneuvers' own (fourws_sim.outcome.VehicleLimits)
+      min_forward_speed_mps: -0.5
+      max_roll_rad: 0.524
+    realtime:                     # optional: what a realtime run must achieve to be ok
+      min_realtime_factor: 0.0    # simulated per wall time (0: no demand)
+      max_stale_share: 0.01       # share of control ticks without a fresh command, and of
+                                  # commands refused, beyond which the run fails
 
 :func:`load_scenario` validates everything it can without building the run: names of the model,
 tire, integrator and laws are checked against their registries, the maneuver is loaded and
@@ -50,7 +58,7 @@ from typing import Any, Mapping
 
 from fourws_control.registry import LAWS
 from fourws_run import interface
-from fourws_run.config import ControllerSpec, RunConfig, software_versions
+from fourws_run.config import ControllerSpec, RealtimeDemand, RunConfig, software_versions
 from fourws_run.series import check_series
 from fourws_run.step_target import scenario_for_law
 from fourws_run.ticks import whole_multiple
@@ -60,6 +68,7 @@ from fourws_sim.maneuvers import (ManeuverSpec, check_model, check_sampling,
                                   load_maneuver_spec,
                                   maneuver_spec_from_mapping)
 from fourws_sim.models import MODELS
+from fourws_sim.outcome import VehicleLimits, vehicle_limits_from
 from fourws_sim.params import (CONFIG_DIR, UNCHECKED_KEY, Tire, Vehicle, available_configs,
                                check_plausible, load_vehicle, read_yaml, resolve_config_path,
                                unchecked_fields_from)
@@ -132,6 +141,8 @@ class Scenario:
     description: str = ""
     road_friction_coefficient: float | None = None
     series: str | tuple[ManeuverSpec, ...] | None = None
+    vehicle_limits: VehicleLimits | None = None
+    realtime: RealtimeDemand = field(default_factory=RealtimeDemand)
     source: str = field(default="", compare=False)
     unchecked_fields: frozenset[str] = frozenset()
 
@@ -173,7 +184,10 @@ class Scenario:
             The maneuver cannot be resolved with the law.
         """
         ctrl = controller if controller is not None else self.controller
-        scenario = self if maneuver is None else dataclasses.replace(self, maneuver=maneuver)
+        maneuver = self.maneuver if maneuver is None else maneuver
+        if self.vehicle_limits is not None:
+            maneuver = dataclasses.replace(maneuver, vehicle_limits=self.vehicle_limits)
+        scenario = dataclasses.replace(self, maneuver=maneuver)
         scenario = scenario_for_law(scenario, law) if ctrl.builtin else scenario
         vehicle = scenario.build_vehicle()
         rec = scenario.recording
@@ -191,7 +205,7 @@ class Scenario:
                          state_period_s=scenario.state_period_s,
                          clock_mode=scenario.clock_mode, controller=ctrl,
                          scenario=scenario.name, recorded_topics=recorded,
-                         versions=software_versions())
+                         realtime=scenario.realtime, versions=software_versions())
 
     @property
     def control_steps(self) -> int:
@@ -218,6 +232,9 @@ class Scenario:
             "road_friction_coefficient": self.road_friction_coefficient,
             "series": (self.series if self.series is None or isinstance(self.series, str)
                        else [m.to_dict() for m in self.series]),
+            **({} if self.vehicle_limits is None
+               else {"vehicle_limits": self.vehicle_limits.to_dict()}),
+            "realtime": self.realtime.to_dict(),
             **extra,
         }
 
@@ -225,7 +242,7 @@ class Scenario:
 _FIELDS = ("name", "description", "vehicle", "maneuver", "laws", "law_options", "model", "tire",
            "integrator", "clock_mode", "integration_step_s", "control_period_s",
            "state_period_s", "belief", "recording", "controller", "road_friction_coefficient",
-           "series", UNCHECKED_KEY)
+           "series", "vehicle_limits", "realtime", UNCHECKED_KEY)
 
 
 def _number(data: Mapping[str, Any], key: str, default: float, source: str,
@@ -402,6 +419,9 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     if friction is not None:
         friction = _number(data, "road_friction_coefficient", 1.0, source)
     series = check_series(data.get("series"), maneuver, source)
+    limits = (None if data.get("vehicle_limits") is None
+              else vehicle_limits_from(data["vehicle_limits"], source))
+    realtime = RealtimeDemand.from_mapping(data.get("realtime"), source)
     return Scenario(
         name=str(name), vehicle=str(vehicle), maneuver=maneuver, laws=tuple(laws_data),
         law_options={k: dict(v) for k, v in law_options.items()}, model=str(model), tire=tire,
@@ -409,7 +429,7 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
         control_period_s=control, state_period_s=state, belief=belief,
         recording=RecordingSpec(enabled, str(output_dir), topics), controller=controller,
         description=description, road_friction_coefficient=friction, series=series,
-        source=source, unchecked_fields=unchecked)
+        vehicle_limits=limits, realtime=realtime, source=source, unchecked_fields=unchecked)
 
 
 def available_scenarios() -> list[str]:

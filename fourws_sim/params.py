@@ -670,3 +670,9 @@ def load_vehicle(name_or_path: str | Path) -> Vehicle:
     """Load and validate a vehicle by name (``table_8_1``) or by YAML path."""
     path = resolve_vehicle_path(name_or_path)
     return vehicle_from_mapping(read_yaml(path), str(path))
+
+
+#: Public names of the field declaration (:func:`_spec`) and the validating loader
+#: (:func:`_from_mapping`), for the validated dataclasses of the packages above this one.
+declare_field = _spec
+dataclass_from_mapping = _from_mapping

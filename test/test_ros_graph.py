@@ -254,15 +254,15 @@ def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
 
 def test_controller_that_stops_answering_fails_the_run(tmp_path):
     """A controller stopped (SIGSTOP) mid-run: lockstep waits for its answer, never runs a tick
-    on anything else, and after command_timeout_s (2 s here) the run fails naming the
+    on anything else, and after answer_timeout_s (2 s here) the run fails naming the
     controller; the bag holds the run up to there, each tick with its command."""
     def freeze_controller(group):
         group.child("fourws_controller").proc.send_signal(signal.SIGSTOP)
 
     sc = _scenario(30.0)
     run = run_graph(sc, "sol1", tmp_path, run_name="frozen", on_running=freeze_controller,
-                    node_overrides={"fourws_simulator": {"command_timeout_s": 2.0}})
-    assert not run.ok and "the controller node (fourws_controller) stopped answering" in run.reason
+                    node_overrides={"fourws_simulator": {"answer_timeout_s": 2.0}})
+    assert not run.ok and "the controller node (fourws_controller) did not answer" in run.reason
     assert run.stale_commands == 0
     bag = load_bag(run.bag_path, allow_incomplete=True)
     state = bag.topics[topics.STATE]

@@ -58,10 +58,11 @@ def _start_recorder(bag: Path, *extra: str) -> subprocess.Popen:
 
 
 def _publish_states(n: int, rate_hz: float, ctx, name: str = "state_source",
-                    final: bool = False) -> None:
+                    final: bool = False, keep: bool = False):
     """Publish ``n`` VehicleState messages (step k, yaw rate k*1e-3, stamp k ms) at rate_hz
     from a node called ``name``; with ``final``, then a final SimulatorStatus with the counts
-    (what the simulator sends when a run ends)."""
+    (what the simulator sends when a run ends). The node is destroyed (it leaves the graph)
+    unless ``keep``: then it is returned, still publishing."""
     import rclpy
     from rclpy.duration import Duration
 
@@ -93,7 +94,10 @@ def _publish_states(n: int, rate_hz: float, ctx, name: str = "state_source",
         status_pub.publish(status)
         status_pub.wait_for_all_acked(Duration(seconds=10))
     pub.wait_for_all_acked(Duration(seconds=10))
+    if keep:
+        return node
     node.destroy_node()
+    return None
 
 
 _AS_SIMULATOR = ("-p", "simulator_node:=state_source",
@@ -179,14 +183,18 @@ def test_recorder_sigkill_leaves_repairable_bag(tmp_path, rclpy_context):
     bag = tmp_path / "bag"
     flush_s = 0.2
     proc = _start_recorder(bag, "-p", f"flush_period_s:={flush_s}", *_AS_SIMULATOR)
+    source = None
     try:
-        _publish_states(500, 1000.0, rclpy_context)
+        # the state source stays (a source that leaves ends the recording by itself)
+        source = _publish_states(500, 1000.0, rclpy_context, keep=True)
         time.sleep(5 * flush_s)  # several flushes after the last message
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait(timeout=10)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
+        if source is not None:
+            source.destroy_node()
     assert proc.returncode == -signal.SIGKILL
     assert not (bag / "metadata.yaml").exists()  # it really died before closing
     run = load_bag(bag, allow_incomplete=True)
@@ -310,7 +318,7 @@ def lockstep_sim(rclpy_context):
 
     from fourws_ros.simulator_node import SimulatorNode
 
-    sim = _make_node(SimulatorNode, rclpy_context, command_timeout_s=0.3,
+    sim = _make_node(SimulatorNode, rclpy_context, answer_timeout_s=0.3,
                      expected_state_subscribers=1)
     peer = _Peer(rclpy_context)
     executor = SingleThreadedExecutor(context=rclpy_context)
@@ -327,7 +335,7 @@ def lockstep_sim(rclpy_context):
 def test_simulator_refuses_bad_commands_and_never_substitutes_one(lockstep_sim):
     """Lockstep: a non-finite and an out-of-limit command are refused and counted; the tick
     waits for a valid answer and runs on it; an answer that never comes stops the run after
-    command_timeout_s (0.3 s here) naming the controller -- no tick ever runs on an input the
+    answer_timeout_s (0.3 s here) naming the controller -- no tick ever runs on an input the
     nodes did not send (zero rear steer would make the numbers depend on the machine's
     load)."""
     sim, peer, executor = lockstep_sim
@@ -336,10 +344,11 @@ def test_simulator_refuses_bad_commands_and_never_substitutes_one(lockstep_sim):
     assert s0.step == 0 and s0.sim_time_s == 0.0
     peer.answer(s0, math.nan)
     peer.answer(s0, 10 * sim.limits.rear_angle_limit_rad)
-    assert _spin_until(executor, lambda: sim.rejections.total == 3, 10.0)
+    assert _spin_until(executor, lambda: sim.clock.rejections.total == 3, 10.0)
     # (each answer() also sends a driver input: the second one for the same state is refused)
-    assert sim.rejections.counts == {f"{topics.REAR_STEER_CMD}: impossible values": 2,
-                                     f"{topics.DRIVER_INPUT}: second answer to one state": 1}
+    assert sim.clock.rejections.counts == {
+        f"{topics.REAR_STEER_CMD}: impossible values": 2,
+        f"{topics.DRIVER_INPUT}: second answer to one state": 1}
     assert len(peer.states) == 1
     cmd = topics.message_class(topics.REAR_STEER_CMD)()
     cmd.angle_rad = 0.01
@@ -348,7 +357,7 @@ def test_simulator_refuses_bad_commands_and_never_substitutes_one(lockstep_sim):
     peer.cmd_pub.publish(cmd)
     assert _spin_until(executor, lambda: len(peer.states) == 2, 10.0)
     s1 = peer.states[1]
-    assert s1.step == sim.n_control and sim.stale_commands == 0
+    assert s1.step == sim.engine.n_control and sim.clock.stale_commands == 0
     # the valid command was applied (8-DOF applied rear angle = command + roll steer; roll is
     # ~0 after 10 ms of a small steer)
     assert s1.rear_wheel_angle_rad == pytest.approx(0.01, abs=1e-4)
@@ -357,7 +366,7 @@ def test_simulator_refuses_bad_commands_and_never_substitutes_one(lockstep_sim):
     peer.driver_pub.publish(conversions.driver_msg(DriverCommand(0.16, 0.01), s1.sim_time_s))
     assert _spin_until(executor, lambda: bool(sim.ended), 10.0)
     assert "no rear-steer command for the state at t = 0.01 s" in sim.stop_reason
-    assert "controller node (fourws_controller) stopped answering" in sim.stop_reason
+    assert "controller node (fourws_controller) did not answer" in sim.stop_reason
     assert len(peer.states) == 2
     for s in peer.states:
         assert math.isfinite(s.yaw_rate_radps) and math.isfinite(s.speed_mps)
@@ -490,7 +499,7 @@ def test_simulator_pause_and_reset_services(lockstep_sim):
     assert call(pause, SetBool.Request(data=False)).success
     assert _spin_until(executor, lambda: len(peer.states) == 2, 10.0)
     # the tick ran on the answers given while paused (not on a timeout's zero rear steer)
-    assert sim.stale_commands == 0
+    assert sim.clock.stale_commands == 0
     assert peer.states[1].rear_wheel_angle_rad == pytest.approx(0.02, abs=1e-3)
     assert peer.states[1].sim_time_s == pytest.approx(sim.control_period_s, abs=1e-12)
     res = call(reset, Trigger.Request())
@@ -523,7 +532,8 @@ def test_realtime_command_timeout_falls_back_to_zero_and_recovers(rclpy_context)
 
     timeout = 0.05  # s of simulation time = 5 control periods
     sim = _make_node(SimulatorNode, rclpy_context, clock_mode="realtime",
-                     command_timeout_s=timeout, realtime_priority=0, status_period_s=0.02)
+                     command_stale_periods=5, realtime_priority=0, status_period_s=0.02,
+                     controller_node="peer", maneuver_node="peer")
     peer = _Peer(rclpy_context)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(sim)
@@ -623,7 +633,7 @@ def test_simulator_publishes_nothing_before_its_subscribers_matched(rclpy_contex
 
     from fourws_ros.simulator_node import SimulatorNode
 
-    sim = _make_node(SimulatorNode, rclpy_context, command_timeout_s=30.0,
+    sim = _make_node(SimulatorNode, rclpy_context, answer_timeout_s=30.0,
                      expected_state_subscribers=1,
                      expected_subscribers_json=json.dumps({topics.STATE: 2}))
     peer = _Peer(rclpy_context)

@@ -23,6 +23,7 @@ from fourws_sim.drivers import Path as ReferencePath
 from fourws_sim.drivers import (DriverCommand, PathDriverSpec, SpeedHoldDriver, SpeedHoldSpec,
                                 TrackingDriverSpec)
 from fourws_sim.errors import ParameterError, describe
+from fourws_sim.outcome import DEFAULT_LIMITS, SPUN, VehicleLimits
 from fourws_sim.params import UNCHECKED_KEY, Vehicle, check_plausible
 
 STEER_INPUTS = ("road_wheel", "steering_wheel")
@@ -85,6 +86,8 @@ class ManeuverSpec:
     speed_hold: SpeedHoldSpec = field(default_factory=SpeedHoldSpec)
     path_driver: PathDriverSpec | None = None
     tracking_driver: TrackingDriverSpec | None = None
+    #: When the car's motion is no longer this maneuver's (:mod:`fourws_sim.outcome`).
+    vehicle_limits: VehicleLimits = DEFAULT_LIMITS
     source: str = field(default="", compare=False)
     unchecked_fields: frozenset[str] = frozenset()
 
@@ -101,6 +104,8 @@ class ManeuverSpec:
             out["path_driver"] = dataclasses.asdict(self.path_driver)
         if self.tracking_driver is not None:
             out["tracking_driver"] = dataclasses.asdict(self.tracking_driver)
+        if self.vehicle_limits != DEFAULT_LIMITS:  # absent when default (older run records)
+            out["vehicle_limits"] = self.vehicle_limits.to_dict()
         to_dict = getattr(self.params, "to_dict", None)
         out.update(to_dict() if to_dict is not None else dataclasses.asdict(self.params))
         if self.unchecked_fields:
@@ -161,7 +166,7 @@ class Maneuver:
                                  f"{UNCHECKED_KEY} to accept it)", spec.source or spec.name)
         self._speed_driver = SpeedHoldDriver(spec.speed_hold, vehicle)
         self._aborted = ""
-        self._end_condition = False
+        self._end_kind = ""
 
     # -- validation of a definition (before any vehicle) -----------------------------------
     @classmethod
@@ -248,17 +253,19 @@ class Maneuver:
     def end_kind(self) -> str:
         """How the maneuver ended: ``completed`` (its duration), ``end_condition`` (the stop
         criterion it is designed to reach, e.g. the ISO 4138 lateral-acceleration limit) or
-        ``aborted`` (the car or the driver could not do it: spun, left the path). Meaningful
-        once :meth:`done` is true."""
+        ``aborted`` (the driver could not do it: left the path), ``spun`` (the car spun or
+        drives backwards) or ``diverged`` (the car left the states the model represents; both
+        by :class:`fourws_sim.outcome.VehicleLimits`). Meaningful once :meth:`done` is
+        true."""
         if not self._aborted:
             return "completed"
-        return "end_condition" if self._end_condition else "aborted"
+        return self._end_kind
 
-    def end(self, reason: str, end_condition: bool = False) -> None:
+    def end(self, reason: str, end_condition: bool = False, kind: str = "") -> None:
         """End the run early: ``reason`` (the abort reason), as the designed end condition
-        of the type or as an abort."""
+        of the type, as an abort, or as ``kind`` (``spun``, ``diverged``)."""
         self._aborted = reason
-        self._end_condition = end_condition
+        self._end_kind = kind or ("end_condition" if end_condition else "aborted")
 
     def check_end(self, t: float, outputs: Mapping[str, Any]) -> None:
         """Look for the type's end condition in ``outputs`` and :meth:`end` the run if it is
@@ -271,10 +278,12 @@ class Maneuver:
         if abs(float(outputs["lateral_accel_mps2"])) >= max_lateral_accel_mps2:
             self.end("lateral acceleration limit reached", end_condition=True)
         elif abs(float(outputs.get("sideslip_rad", 0.0))) > max_sideslip_rad:
-            self.end("sideslip limit reached (the car spins)")
+            self.end("sideslip limit reached (the car spins)", kind=SPUN)
 
     def done(self, t: float, outputs: Mapping[str, Any] | None = None) -> bool:
-        """True once the run may end: duration reached, or an end condition of the type."""
+        """True once the run may end: duration reached, an end condition of the type, or the
+        car's motion past the maneuver's :class:`~fourws_sim.outcome.VehicleLimits` (the
+        run ends ``spun`` or ``diverged`` at this state)."""
         if self._aborted:
             return True
         if t >= self.duration_s - TIME_EPS_S:
@@ -282,6 +291,10 @@ class Maneuver:
         if outputs is None:
             return False
         self.check_end(t, outputs)
+        if not self._aborted:
+            breach = self.spec.vehicle_limits.violation(t, outputs)
+            if breach is not None:
+                self.end(breach.reason, kind=breach.kind)
         return bool(self._aborted)
 
     def to_dict(self) -> dict[str, Any]:

@@ -19,6 +19,7 @@ from fourws_sim.maneuvers.base import (MAX_DURATION_S, MAX_HAND_WHEEL_ANGLE_RAD,
                                        ManeuverSpec, peak_input)
 from fourws_sim.maneuvers.registry import DRIVER_KEYS, MANEUVER_CLASSES
 from fourws_sim.models import FREE_STEERING_MODELS
+from fourws_sim.outcome import VehicleLimits, vehicle_limits_from
 from fourws_sim.params import (CONFIG_DIR, MAX_SPEED_MPS, UNCHECKED_KEY, Vehicle, _from_mapping,
                                available_configs, bounded_fields, check_plausible,
                                name_and_description, read_yaml, resolve_config_path,
@@ -27,7 +28,7 @@ from fourws_sim.params import (CONFIG_DIR, MAX_SPEED_MPS, UNCHECKED_KEY, Vehicle
 MANEUVER_DIR = CONFIG_DIR / "maneuvers"
 #: Fields every maneuver file may have besides its type's fields.
 COMMON_FIELDS = ("name", "type", "description", "initial_speed_mps", "duration_s",
-                 "steer_input", "speed_hold", *DRIVER_KEYS, UNCHECKED_KEY)
+                 "steer_input", "speed_hold", "vehicle_limits", *DRIVER_KEYS, UNCHECKED_KEY)
 #: Plausibility bounds of the fields every maneuver has.
 COMMON_BOUNDS = {"initial_speed_mps": (0.0, MAX_SPEED_MPS), "duration_s": (1e-3, MAX_DURATION_S)}
 _DRIVER_SPECS = {"path_driver": path_driver_spec_from,
@@ -56,6 +57,7 @@ def _bounded_fields(params_cls: type) -> set[str]:
     """Names ``unchecked_fields`` of a maneuver of this parameter class may list."""
     return {*COMMON_BOUNDS, *bounded_fields(params_cls),
             *bounded_fields(SpeedHoldSpec, "speed_hold."),
+            *bounded_fields(VehicleLimits, "vehicle_limits."),
             *bounded_fields(PathDriverSpec, "path_driver."),
             *bounded_fields(TrackingDriverSpec, "tracking_driver.")}
 
@@ -132,11 +134,12 @@ def maneuver_spec_from_mapping(data: Any, source: str = "<mapping>",
                                  "would never be applied", source)
     _check_peak_input(params, steer_input, source, unchecked)
     speed_hold = speed_hold_spec_from(data.get("speed_hold"), source, unchecked=unchecked)
+    limits = vehicle_limits_from(data.get("vehicle_limits"), source, unchecked=unchecked)
     drivers = {key: (_DRIVER_SPECS[key](data.get(key), source, unchecked=unchecked)
                      if cls.driver_key == key else None) for key in DRIVER_KEYS}
     return ManeuverSpec(
         name=name, type=kind, params=params, steer_input=steer_input,
-        description=description, speed_hold=speed_hold, source=source,
+        description=description, speed_hold=speed_hold, vehicle_limits=limits, source=source,
         unchecked_fields=unchecked, **drivers, **common)
 
 

@@ -1,0 +1,201 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
+"""The launcher's ROS side of ``fourws run``: the run description, the run nodes' statuses,
+their last words on ``/rosout``, the graph's endpoints and the pause service.
+
+The launcher takes status messages only from the run's own nodes (publisher identity from
+rclpy message info): a foreign status cannot end a run. What the nodes say on ``/rosout``
+(warnings and errors, by node name) is kept, so a run that stops because a node did not
+answer can say what that node was waiting for.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import rclpy
+from rcl_interfaces.msg import Log
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import qos_profile_rosout_default
+from rclpy.signals import SignalHandlerOptions
+from std_msgs.msg import String
+from std_srvs.srv import SetBool
+
+from fourws_ros import topics
+from fourws_ros.domains import graph_env
+from fourws_ros.identity import PublisherNames, drain
+from fourws_run.verdict import ManeuverReport, SimReport
+
+Role = topics.Role
+#: Log levels kept from ``/rosout`` (rcl_interfaces/Log: WARN 30, ERROR 40, FATAL 50).
+_KEPT_LEVELS = (Log.WARN, Log.ERROR, Log.FATAL)
+
+
+@dataclass
+class RunState:
+    """What the launcher knows of the running graph (from the run's own nodes only)."""
+
+    sim: Any = None
+    sim_final: Any = None
+    maneuver: Any = None
+    maneuver_end: Any = None
+    recorder: Any = None
+    events: list[str] = field(default_factory=list)
+    foreign: int = 0
+    last_advance: float = 0.0
+    sim_time_s: float = 0.0
+    t_start: float = 0.0
+    t_end: float = 0.0
+    #: The last warning or error each node said on /rosout.
+    last_words: dict[str, str] = field(default_factory=dict)
+    #: The law the user controller's commands name (from the bag, after the run).
+    law_label: str = ""
+
+    def sim_report(self) -> SimReport | None:
+        """The simulator's final (or last) status as a :class:`SimReport`."""
+        msg = self.sim_final or self.sim
+        if msg is None:
+            return None
+        return SimReport(
+            sim_time_s=float(msg.sim_time_s), max_lateness_s=float(msg.max_lateness_s),
+            p99_lateness_s=float(msg.p99_lateness_s), overruns=int(msg.overruns),
+            stale_commands=int(msg.stale_commands), steps=int(msg.steps),
+            commands_accepted=int(msg.commands_accepted), end_reason=str(msg.end_reason),
+            stop_reason=str(msg.stop_reason), final=bool(msg.final),
+            rejections={str(r): int(n)
+                        for r, n in zip(msg.rejected_reasons, msg.rejected_counts)})
+
+    def maneuver_report(self) -> ManeuverReport | None:
+        """The maneuver's end (or last) status as a :class:`ManeuverReport`."""
+        msg = self.maneuver_end or self.maneuver
+        if msg is None:
+            return None
+        return ManeuverReport(end=str(msg.end), event=str(msg.event),
+                              done=self.maneuver_end is not None,
+                              rejections={str(r): int(n) for r, n in
+                                          zip(msg.rejected_reasons, msg.rejected_counts)})
+
+
+class LauncherNode:
+    """The launcher's ROS node on the run's domain (module docstring).
+
+    Parameters
+    ----------
+    domain_id : int
+    config_json : str
+        The run description (``/fourws/run_config``, latched).
+    writers : dict
+        ROS node name of each role.
+    state : RunState
+        Filled by the callbacks.
+    """
+
+    def __init__(self, domain_id: int, config_json: str, writers: dict[Role, str],
+                 state: RunState) -> None:
+        # the domain goes to rclpy.init; the process environment keeps the user's
+        # ROS_DOMAIN_ID (a later run in this process must see what the user set, not ours)
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        for key in ("FASTDDS_DEFAULT_PROFILES_FILE",):
+            value = graph_env(domain_id).get(key)
+            if value and not os.environ.get(key):
+                os.environ[key] = value
+        self.context = Context()
+        rclpy.init(args=[], context=self.context, domain_id=domain_id,
+                   signal_handler_options=SignalHandlerOptions.NO)
+        self.node = rclpy.create_node(topics.NODE_NAMES[Role.LAUNCHER], context=self.context,
+                                      enable_rosout=False)
+        # message info (publisher identity) needs the single-threaded executor
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.state = state
+        self.writers = writers
+        self.names = PublisherNames(self.node)
+        self.config_pub = self.node.create_publisher(String, topics.RUN_CONFIG,
+                                                     topics.LATCHED_QOS)
+        self.config_pub.publish(String(data=config_json))
+        for topic, handler in ((topics.MANEUVER_STATUS, self._on_maneuver),
+                               (topics.SIM_STATUS, self._on_sim),
+                               (topics.RECORDER_STATUS, self._on_recorder)):
+            self._subscribe(topic, handler)
+        self.node.create_subscription(Log, "/rosout", self._on_rosout,
+                                      qos_profile_rosout_default)
+        self.pause = self.node.create_client(SetBool, topics.SRV_PAUSE)
+
+    def _subscribe(self, topic: str, handler: Callable[[Any, Any], None]) -> None:
+        """Subscribe ``handler(msg, info)``, taking every queued message per wake-up (a
+        foreign node flooding a status topic cannot push the run's own messages out)."""
+        msg_type = topics.message_class(topic)
+        holder: list[Any] = []
+
+        def callback(msg: Any, info: Any) -> None:
+            handler(msg, info)
+            drain(holder[0], msg_type, False, handler)
+
+        holder.append(self.node.create_subscription(msg_type, topic, callback,
+                                                    topics.STATUS_QOS))
+
+    def spin(self, seconds: float) -> None:
+        """Run callbacks for up to ``seconds``."""
+        self.names.refresh(topics.MANEUVER_STATUS, topics.SIM_STATUS, topics.RECORDER_STATUS)
+        self.executor.spin_once(timeout_sec=seconds)
+
+    def _from(self, topic: str, info: Any, role: Role) -> bool:
+        ok = self.names.of(topic, info) == self.writers[role]
+        if not ok:
+            self.state.foreign += 1
+        return ok
+
+    def _on_maneuver(self, msg: Any, info: Any) -> None:
+        if not self._from(topics.MANEUVER_STATUS, info, Role.MANEUVER):
+            return
+        self.state.maneuver = msg
+        if msg.event:
+            self.state.events.append(msg.event)
+        if msg.done:
+            self.state.maneuver_end = msg
+
+    def _on_sim(self, msg: Any, info: Any) -> None:
+        if not self._from(topics.SIM_STATUS, info, Role.SIMULATOR):
+            return
+        state = self.state
+        if msg.sim_time_s > state.sim_time_s:
+            state.last_advance = time.monotonic()
+        state.sim_time_s = max(state.sim_time_s, float(msg.sim_time_s))
+        state.sim = msg
+        if msg.final:
+            state.sim_final = msg
+            state.t_end = state.t_end or time.monotonic()
+
+    def _on_recorder(self, msg: Any, info: Any) -> None:
+        if self._from(topics.RECORDER_STATUS, info, Role.RECORDER):
+            self.state.recorder = msg
+
+    def _on_rosout(self, msg: Any) -> None:
+        # only the run's nodes: a foreign node cannot put words in a run's mouth
+        if msg.level in _KEPT_LEVELS and msg.name in self.writers.values():
+            self.state.last_words[str(msg.name)] = str(msg.msg)[:300]
+
+    def has_endpoint(self, topic: str, kind: str, node_name: str) -> bool:
+        """Whether ``node_name`` publishes (``kind`` "pub") or subscribes ``topic``."""
+        infos = (self.node.get_publishers_info_by_topic(topic) if kind == "pub"
+                 else self.node.get_subscriptions_info_by_topic(topic))
+        return any(i.node_name == node_name for i in infos)
+
+    def start_simulation(self) -> bool:
+        """Un-pause the simulator; False if it did not answer."""
+        future = self.pause.call_async(SetBool.Request(data=False))
+        self.executor.spin_until_future_complete(future, timeout_sec=10.0)
+        return future.done()
+
+    def close(self) -> None:
+        """Destroy the node and its context."""
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
+__all__ = ["LauncherNode", "RunState"]
