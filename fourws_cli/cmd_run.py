@@ -79,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
         controller = ControllerSpec.from_mapping({"command": list(controller.command),
                                                   "name": args.controller_name},
                                                  "--controller-name")
+    controller.check_runnable("--controller" if args.controller is not None
+                              else scenario.source)
     if not controller.builtin:
         if args.law:
             raise ParameterError("--law", "a user controller (--controller) runs its own law; "

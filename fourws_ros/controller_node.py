@@ -23,9 +23,13 @@ law_options_json : str
 vehicle : str
     Simulated vehicle (name or YAML path); read-only.
 belief_vehicle : str
-    The controller's belief of the vehicle ('' = ``vehicle``); the gains come from it.
+    The controller's belief of the vehicle ('' = ``vehicle``); the gains come from it. Not
+    used (a live change is refused, saying so) while ``belief_vehicle_json`` is set.
+belief_vehicle_json : str
+    The belief as a whole vehicle mapping (``fourws run`` sets it to the scenario's belief).
 belief_scale_front, belief_scale_rear : float
-    Scales of the belief's axle cornering stiffnesses (e.g. 0.6 for a -40 % belief).
+    Scales of the belief's axle cornering stiffnesses (e.g. 0.6 for a -40 % belief), applied
+    to whichever belief is given; live changes take effect at the next state.
 angle_limit_rad, rate_limit_radps : float
     Actuator limits (0 = the vehicle file's ``actuators``).
 control_period_s : float
@@ -92,8 +96,8 @@ class ControllerNode(Node):
         self.declare_parameter("belief_vehicle", "", ParameterDescriptor(
             description="controller belief vehicle ('' = vehicle)"))
         self.declare_parameter("belief_vehicle_json", "", ParameterDescriptor(
-            description="the belief as a whole vehicle-file mapping in JSON (overrides "
-                        "belief_vehicle and the scales when not empty)"))
+            description="the belief as a whole vehicle-file mapping in JSON (replaces "
+                        "belief_vehicle when not empty; the scales apply to it)"))
         self.declare_parameter("belief_scale_front", 1.0, ParameterDescriptor(
             description="belief front cornering stiffness scale, 1",
             floating_point_range=_float_range(0.05, 20.0)))
@@ -194,9 +198,11 @@ class ControllerNode(Node):
         else:
             belief = (load_vehicle(values["belief_vehicle"]) if values["belief_vehicle"]
                       else self.vehicle)
-            sf, sr = float(values["belief_scale_front"]), float(values["belief_scale_rear"])
-            if sf != 1.0 or sr != 1.0:
-                belief = belief.with_axle_tires(sf, sr)
+        # the scales act on whichever belief is given (fourws run gives it as JSON, scaled
+        # already by the scenario's scales: a live scale change multiplies that)
+        sf, sr = float(values["belief_scale_front"]), float(values["belief_scale_rear"])
+        if sf != 1.0 or sr != 1.0:
+            belief = belief.with_axle_tires(sf, sr)
         law = make_loop_law(str(values["law"]), belief, self.dt_s, options)
         law.gains(max(self.vehicle_speed_hint(), 1.0))  # fail now on a law that cannot design
         limits: dict[str, float] = {}
@@ -223,6 +229,12 @@ class ControllerNode(Node):
             return SetParametersResult(successful=True)
         values = {p: self.get_parameter(p).value for p in self._BUILD_PARAMS}
         values.update(changed)
+        if "belief_vehicle" in changed and values["belief_vehicle_json"]:
+            reason = ("belief_vehicle: not used while belief_vehicle_json is set (fourws run "
+                      "sets it to the scenario's belief); set belief_vehicle_json instead, or "
+                      "to '' together with belief_vehicle")
+            self.get_logger().warning(f"rejected parameter change: {reason}")
+            return SetParametersResult(successful=False, reason=reason)
         try:
             law, actuator = self._build(values, self.actuator.angle_rad)
         except (FourwsError, TypeError) as exc:

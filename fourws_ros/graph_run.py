@@ -58,8 +58,9 @@ NODE_EXIT_S = 40.0
 #: Realtime: simulation time beyond the maneuver's duration after which a run the maneuver
 #: did not end fails, s.
 REALTIME_OVERRUN_S = 2.0
-#: SCHED_FIFO priority of the lockstep answer chain (simulator, maneuver, controller) and of
-#: the realtime simulator, when permitted (speed only; correctness never depends on it).
+#: SCHED_FIFO priority of the answer chain (simulator, maneuver, controller), when permitted
+#: (speed only; the verdict never depends on it: a realtime run whose answers come late says
+#: so, as stale commands).
 FIFO_PRIORITY = 10
 
 
@@ -324,9 +325,9 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
     why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded)
     if why:
         return why
-    chain = ([NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER],
-              config.controller.node_name] if config.lockstep
-             else [NODE_NAMES[Role.SIMULATOR]])
+    # the answer chain: in lockstep it sets the pace, in realtime its answers must come
+    # within the command freshness limit (the realtime thread raises itself higher)
+    chain = [NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER], config.controller.node_name]
     granted = [set_fifo(c.proc.pid, FIFO_PRIORITY) for c in group.children
                if c.name in chain and c.proc is not None]
     if not all(granted):

@@ -64,6 +64,7 @@ class RunState:
             sim_time_s=float(msg.sim_time_s), max_lateness_s=float(msg.max_lateness_s),
             p99_lateness_s=float(msg.p99_lateness_s), overruns=int(msg.overruns),
             stale_commands=int(msg.stale_commands), steps=int(msg.steps),
+            wall_time_s=float(getattr(msg, "wall_time_s", 0.0)),
             commands_accepted=int(msg.commands_accepted), end_reason=str(msg.end_reason),
             stop_reason=str(msg.stop_reason), final=bool(msg.final),
             rejections={str(r): int(n)

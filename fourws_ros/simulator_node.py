@@ -54,7 +54,7 @@ from std_srvs.srv import SetBool, Trigger
 
 from fourws_ros import conversions, peers, reporting, topics
 from fourws_ros.identity import PublisherNames
-from fourws_ros.runtime import report_phase, run_node
+from fourws_ros.runtime import EXIT_PEERS, report_phase, run_node
 from fourws_run import codecs
 from fourws_run.clock_modes import (CLOCK_MODES, DRIVER_INPUT, LockstepClock, RealtimeClock,
                                     make_clock)
@@ -452,6 +452,7 @@ class SimulatorNode(Node):
         if not clock.started:
             why = self.peers.check_startup()
             if why:
+                self.exit_code = EXIT_PEERS
                 self.end(why, True)
             elif self._run_wanted and self._graph_ready():
                 clock.resume()
@@ -460,6 +461,7 @@ class SimulatorNode(Node):
             return
         gone = self.peers.gone()
         if gone:
+            self.exit_code = EXIT_PEERS
             self.end(f"{gone}; {self._waiting_text()}".rstrip("; "), True)
             return
         clock.housekeeping()
@@ -505,6 +507,7 @@ class SimulatorNode(Node):
         msg.max_lateness_s = float(pacer.max_lateness_s)
         msg.p99_lateness_s = pacer.percentile(99.0)
         msg.steps = int(self.engine.sim.step_count)
+        msg.wall_time_s = float(clock.wall_time_s)
         msg.overruns = int(pacer.overruns)
         overruns = pacer.take_overruns()
         msg.overrun_times_s = [o[0] for o in overruns]

@@ -91,6 +91,20 @@ class Clock:
         #: Control ticks run.
         self.ticks = 0
         self.pacer = Pacer(engine.sim.dt_s)
+        self._wall_start: float | None = None
+        self._wall_stop: float | None = None
+
+    def _started_now(self) -> None:
+        if self._wall_start is None:
+            self._wall_start = time.monotonic()
+
+    @property
+    def wall_time_s(self) -> float:
+        """Wall time since the simulation started running (to its end once it ended), s."""
+        if self._wall_start is None:
+            return 0.0
+        end = self._wall_stop if self._wall_stop is not None else time.monotonic()
+        return end - self._wall_start
 
     @property
     def book(self) -> LockstepAnswers | RealtimeAnswers:
@@ -100,6 +114,8 @@ class Clock:
     def pause(self) -> None:
         """Stop advancing (the run ended, or /fourws/pause)."""
         self.paused = True
+        if self._wall_start is not None and self._wall_stop is None:
+            self._wall_stop = time.monotonic()
 
     @property
     def rejections(self) -> Rejections:
@@ -166,6 +182,7 @@ class LockstepClock(Clock):
         if self.started:
             return
         self.started = True
+        self._started_now()
         self._publish(self.engine.tick)
 
     def resume(self) -> None:
@@ -338,7 +355,7 @@ class RealtimeClock(Clock):
 
     def pause(self) -> None:
         """Pause (the thread stops)."""
-        self.paused = True
+        super().pause()
         self.stop()
 
     def offer_driver(self, stamp_ns: int, cmd: DriverCommand) -> None:
@@ -394,6 +411,7 @@ class RealtimeClock(Clock):
         engine, book, pacer = self.engine, self.answers, self.pacer
         sim = engine.sim
         n_control = engine.n_control
+        self._started_now()
         pacer.start(sim.time_s)
         k = 0
         rear = 0.0

@@ -25,9 +25,12 @@ loads.
 from __future__ import annotations
 
 import dataclasses
+import os
 import platform
 import re
 import shlex
+import shutil
+import sys
 from dataclasses import dataclass, field
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any, Mapping
@@ -69,6 +72,32 @@ class ControllerSpec:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping."""
         return {"command": list(self.command), "node_name": self.node_name}
+
+    def check_runnable(self, source: str | None = None) -> None:
+        """Refuse a user controller whose program or script does not exist, before anything
+        of a run is created (a missing file would otherwise be found only once the graph is
+        starting). The program is looked up on ``PATH`` with this Python's folder first (as
+        the launcher starts it); for a Python interpreter, its script must exist too.
+
+        Raises
+        ------
+        ParameterError
+            ``controller.command`` names a program or script that is not there.
+        """
+        if self.builtin:
+            return
+        program = self.command[0]
+        path = os.pathsep.join([os.path.dirname(sys.executable), os.environ.get("PATH", "")])
+        if not program.endswith(".py") and shutil.which(program, path=path) is None \
+                and not os.path.isfile(program):
+            raise ParameterError("controller.command", f"{program!r}: no such program (on "
+                                 "PATH or as a file)", source)
+        script = program if program.endswith(".py") else next(
+            (a for a in self.command[1:] if not a.startswith("-")), None)
+        python = re.fullmatch(r"python[0-9.]*", os.path.basename(program)) is not None
+        if (program.endswith(".py") or python) and script is not None \
+                and not os.path.isfile(script):
+            raise ParameterError("controller.command", f"{script!r}: no such file", source)
 
     @classmethod
     def from_mapping(cls, data: Any, source: str = "<controller>") -> "ControllerSpec":

@@ -57,6 +57,7 @@ class SimReport:
     overruns: int = 0
     stale_commands: int = 0
     steps: int = 0
+    wall_time_s: float = 0.0
     commands_accepted: int = 0
     end_reason: str = ""
     stop_reason: str = ""
@@ -133,6 +134,8 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
         record.p99_lateness_s = sim.p99_lateness_s
         record.overruns = sim.overruns
         record.stale_commands = sim.stale_commands
+        if sim.wall_time_s > 0.0:  # the simulator's own measure of the running phase
+            record.wall_time_s = sim.wall_time_s
         n_control = max(int(round(config.control_period_s / config.integration_step_s)), 1)
         record.control_ticks = sim.steps // n_control
         for reason, n in sim.rejections.items():

@@ -74,3 +74,34 @@ def test_hand_started_lockstep_graph_ends_by_itself_with_a_complete_described_ba
     (entry,) = metrics["runs"].values()
     assert entry["law"] == "sol1"
     assert entry["iso7401_step"]
+
+
+def test_hand_started_graph_whose_recorder_refuses_its_bag_ends_with_its_reason(
+        tmp_path, ros_domain):
+    """The README recipe run a second time: the bag folder exists, the recorder refuses it
+    (exit 2) and says why on /fourws/node_config; the simulator, the maneuver and the
+    controller stop with the recorder's reason (exit 5: they gave up on a peer) instead of
+    waiting -- every process is gone well within the start-up timeout (120 s)."""
+    bag = tmp_path / "bag"
+    bag.mkdir()  # what the first run left
+    env = dict(os.environ)
+    procs = {
+        "recorder": _node("recorder", "-p", f"bag_path:={bag}", env=env),
+        "controller": _node("controller", env=env),
+        "maneuver": _node("maneuver", env=env),
+        "simulator": _node("simulator", env=env),
+    }
+    outs = {}
+    try:
+        for name, proc in procs.items():
+            outs[name] = proc.communicate(timeout=100)[0].decode(errors="replace")
+    finally:
+        for proc in procs.values():
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+    assert procs["recorder"].returncode == 2, outs["recorder"]
+    assert "exists" in outs["recorder"]
+    for name in ("simulator", "maneuver", "controller"):
+        assert procs[name].returncode == 5, f"{name}: {outs[name]}"
+        assert "fourws_recorder refused its configuration" in outs[name], outs[name]
+        assert "Traceback" not in outs[name]

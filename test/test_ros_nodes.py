@@ -749,3 +749,54 @@ def test_maneuver_refuses_a_non_finite_state_on_the_runs_clock(rclpy_context):
         executor.shutdown()
         for n in (man, src):
             n.destroy_node()
+
+
+# ----------------------------------------------------------------------------- live parameters
+def test_controller_live_belief_changes_take_effect_or_are_refused(rclpy_context, tmp_path):
+    """The controller's belief while it runs (``ros2 param set``): a scale change takes
+    effect on the belief it is given -- also the JSON belief fourws run gives it: the law's
+    belief then has 0.6 x the front cornering stiffness of that belief, exactly; a
+    ``belief_vehicle`` change while ``belief_vehicle_json`` is set is refused, saying so
+    (it would have no effect); with no JSON belief, a missing, UTF-16 or ``chassis: null``
+    file is refused naming the problem and leaves the running belief untouched."""
+    from rclpy.parameter import Parameter
+
+    from fourws_ros.controller_node import ControllerNode
+    from fourws_sim.params import load_vehicle
+
+    given = load_vehicle("table_8_1").with_axle_tires(0.8, 1.0)  # the scenario's belief
+    node = _make_node(ControllerNode, rclpy_context, law="sol1",
+                      belief_vehicle_json=json.dumps(given.to_dict()))
+    try:
+        cf = given.axle_tires.cornering_stiffness_front_n_per_rad
+        assert node.law.vehicle.axle_tires.cornering_stiffness_front_n_per_rad == cf
+        (res,) = node.set_parameters([Parameter("belief_scale_front", value=0.6)])
+        assert res.successful, res.reason
+        assert node.law.vehicle.axle_tires.cornering_stiffness_front_n_per_rad == 0.6 * cf
+        (res,) = node.set_parameters([Parameter("belief_vehicle", value="table_4_4")])
+        assert not res.successful and "belief_vehicle_json is set" in res.reason
+        assert node.law.vehicle.axle_tires.cornering_stiffness_front_n_per_rad == 0.6 * cf
+    finally:
+        node.destroy_node()
+    node = _make_node(ControllerNode, rclpy_context, law="sol1")
+    try:
+        before = node.law.vehicle
+        utf16 = tmp_path / "utf16.yaml"
+        utf16.write_text("chassis: {}\n", encoding="utf-16")
+        import yaml
+
+        null = tmp_path / "null.yaml"
+        data = yaml.safe_load((Path(__file__).parent.parent / "config/vehicles/table_8_1.yaml")
+                              .read_text())
+        data["chassis"] = None
+        null.write_text(yaml.safe_dump(data))
+        for bad, said in ((tmp_path / "missing.yaml", "missing.yaml"), (utf16, "UTF-8"),
+                          (null, "chassis")):
+            (res,) = node.set_parameters([Parameter("belief_vehicle", value=str(bad))])
+            assert not res.successful and said in res.reason, res.reason
+            assert node.law.vehicle is before
+        (res,) = node.set_parameters([Parameter("belief_vehicle", value="table_4_4")])
+        assert res.successful, res.reason
+        assert node.law.vehicle.name == "table_4_4"
+    finally:
+        node.destroy_node()
