@@ -12,25 +12,26 @@ PIP := $(VENV)/bin/pip
 LOCK := requirements.lock
 STAMP := $(VENV)/.fourws-setup-done
 MSGS_STAMP := $(VENV)/.fourws-msgs-done
+KERNELS_STAMP := $(VENV)/.fourws-kernels-done
 MSGS_BUILD := build/venv-interfaces
 LOCK_VENV := build/lock-venv
 
 .PHONY: setup test demo bench lock clean
 
-setup: $(STAMP) $(MSGS_STAMP)
+setup: $(STAMP) $(MSGS_STAMP) $(KERNELS_STAMP)
 
 # One line per stage; the stage's own output goes to the terminal only when it fails.
 $(STAMP): requirements.txt $(LOCK) setup.py Makefile
 	@command -v python3 >/dev/null || { echo "python3 missing: apt-get install python3 python3-venv"; exit 1; }
 	@if ! command -v cmake >/dev/null || ! command -v g++ >/dev/null || ! python3 -c "import ensurepip" 2>/dev/null; then \
-	  echo "setup 1/4: installing cmake, g++ and python3-venv from Debian"; \
+	  echo "setup 1/5: installing cmake, g++ and python3-venv from Debian"; \
 	  apt-get update -qq && apt-get install -y -qq cmake g++ python3-venv python3-dev >/dev/null; \
-	else echo "setup 1/4: cmake, g++ and python3-venv are installed"; fi
-	@echo "setup 2/4: Python packages into $(VENV), versions from $(LOCK) (about 1 min the first time)"
+	else echo "setup 1/5: cmake, g++ and python3-venv are installed"; fi
+	@echo "setup 2/5: Python packages into $(VENV), versions from $(LOCK) (about 1 min the first time)"
 	@test -x $(PY) || python3 -m venv $(VENV)
 	@$(PIP) install -q --upgrade pip -c $(LOCK) $(QUIET)
 	@$(PIP) install -q -r requirements.txt -c $(LOCK) $(QUIET)
-	@echo "setup 3/4: fourws itself (editable, from this checkout)"
+	@echo "setup 3/5: fourws itself (editable, from this checkout)"
 	@$(PIP) install -q --no-deps -e . >$(VENV)/fourws-install.log 2>&1 \
 	  || { cat $(VENV)/fourws-install.log; exit 1; }
 	@touch $(STAMP)
@@ -40,7 +41,7 @@ $(STAMP): requirements.txt $(LOCK) setup.py Makefile
 # with no extra environment. Rebuilt when a .msg or the package files change (or after the
 # venv was reinstalled).
 $(MSGS_STAMP): $(STAMP) $(wildcard msg/*.msg) CMakeLists.txt package.xml
-	@echo "setup 4/4: message interfaces (CMake against the ROS wheels, about 30 s; log $(MSGS_BUILD)/build.log)"
+	@echo "setup 4/5: message interfaces (CMake against the ROS wheels, about 30 s; log $(MSGS_BUILD)/build.log)"
 	@rm -rf $(MSGS_BUILD) && mkdir -p $(MSGS_BUILD)
 	@V=$(abspath $(VENV)); PATH=$$V/bin:$$PATH CMAKE_PREFIX_PATH=$$V AMENT_PREFIX_PATH=$$V \
 	  cmake -S . -B $(MSGS_BUILD) -DCMAKE_INSTALL_PREFIX=$$V -DFOURWS_INTERFACES_ONLY=ON \
@@ -51,6 +52,13 @@ $(MSGS_STAMP): $(STAMP) $(wildcard msg/*.msg) CMakeLists.txt package.xml
 	@cd /tmp && $(abspath $(PY)) -c "from fourws.msg import VehicleState" \
 	  || { echo "the built messages do not import (from fourws.msg import VehicleState)"; exit 1; }
 	@touch $(MSGS_STAMP)
+
+# The simulator's numba kernels compiled into their disk cache (fourws_sim/warmup.py), so no
+# run compiles them: again only when a kernel source changed (numba checks the cache itself).
+$(KERNELS_STAMP): $(MSGS_STAMP) $(wildcard fourws_sim/*.py fourws_sim/models/*.py fourws_sim/tires/*.py)
+	@echo "setup 5/5: compiling the simulator's kernels into numba's cache (minutes the first time)"
+	@$(PY) -m fourws_sim.warmup
+	@touch $(KERNELS_STAMP)
 	@echo "setup done: $(VENV)/bin/fourws --help"
 
 test: setup

@@ -314,6 +314,7 @@ def _label_user_law(record: RunRecord, config: RunConfig) -> None:
                 return
             if law:
                 record.law = str(law)
+                record.config = {**record.config, "law": str(law)}
             return
 
 

@@ -9,6 +9,9 @@ the zero-sideslip feed-forward of the linear single-track model on the belief ve
 with a = CG to front axle, b = CG to rear axle, L = a + b, m the mass, Cf/Cr the belief's axle
 cornering stiffnesses and U the state's speed (the steady-state sideslip of the 2-DOF model is
 zero with this ratio), clipped to the rear angle limit.
+
+``--nan-from T`` (tests of the simulator's input checks): from simulation time T on, every
+command it sends is NaN.
 """
 
 import json
@@ -41,8 +44,9 @@ def ratio(car: dict, speed: float) -> float:
 
 
 class ContractController(Node):
-    def __init__(self) -> None:
+    def __init__(self, nan_from: float = float("inf")) -> None:
         super().__init__("my_controller")
+        self.nan_from = nan_from
         self.config = None
         self.states = {}
         self.fronts = {}
@@ -81,7 +85,8 @@ class ContractController(Node):
             cmd = RearSteerCommand()
             cmd.header.stamp = state.header.stamp
             cmd.header.frame_id = "base_link"
-            cmd.angle_rad = min(max(angle, -limit), limit)
+            cmd.angle_rad = (min(max(angle, -limit), limit) if state.sim_time_s < self.nan_from
+                             else float("nan"))
             cmd.law = "contract_zero_sideslip"
             cmd.state_stamp = state.header.stamp
             cmd.state_step = state.step
@@ -89,8 +94,14 @@ class ContractController(Node):
 
 
 def main() -> int:
-    rclpy.init(args=sys.argv)
-    node = ContractController()
+    args = list(sys.argv)
+    nan_from = float("inf")
+    if "--nan-from" in args:
+        k = args.index("--nan-from")
+        nan_from = float(args[k + 1])
+        del args[k:k + 2]
+    rclpy.init(args=args)
+    node = ContractController(nan_from)
     try:
         while rclpy.ok() and not node.done:
             rclpy.spin_once(node, timeout_sec=0.1)
