@@ -207,8 +207,8 @@ def level_speeds(level: str, vehicle: Vehicle, law: Law | str | None = "fws",
     try:
         k = understeer_gradient(level, vehicle)
         fws = critical_speed(level, vehicle, "fws", speed_range_mps)
-        with_law = fws if law_obj.name == "fws" else critical_speed(level, vehicle, law_obj,
-                                                                     speed_range_mps)
+        with_law = fws if law_obj.name == "fws" else \
+            critical_speed(level, vehicle, law_obj, speed_range_mps)
     except (FourwsError, np.linalg.LinAlgError) as exc:
         return LevelSpeeds(level, searched_range_mps=tuple(speed_range_mps),  # type: ignore
                            unavailable=str(exc))
