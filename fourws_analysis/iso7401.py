@@ -108,7 +108,7 @@ class StepMetrics:
             "response_time_s": self.response_time_s,
             "peak_response_time_s": self.peak_response_time_s,
             "overshoot_fraction": self.overshoot, "settled": self.settled,
-            "overshoot_is_spike": bool(self.spike), "spike": self.spike or None,
+            "overshoot_is_spike": bool(self.spike), "spike": self.spike,
             "notes": list(self.notes)}
 
 
