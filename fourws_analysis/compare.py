@@ -39,8 +39,8 @@ import control
 import numpy as np
 
 from fourws_analysis import frequency as fq
-from fourws_analysis import (identify, iso4138, iso7401, lane_change, linear, linearize,
-                             standards, units)
+from fourws_analysis import (critical_speeds, identify, iso4138, iso7401, lane_change, linear,
+                             linearize, standards, units)
 from fourws_analysis.bag import MetricUnavailableError, UniformRun
 from fourws_control import Law, LinearGains, make_law
 from fourws_sim.errors import FourwsError
@@ -65,6 +65,8 @@ STEER_REFERENCES = {
 Progress = Callable[[str], None]
 #: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options.
 _SWEEP_CACHE: dict[str, Any] = {}
+#: Level comparisons (critical speeds per model level) likewise.
+_LEVELS_CACHE: dict[str, Any] = {}
 #: Open-loop 8-DOF Jacobians at straight running already computed in this process, by vehicle
 #: and speed (a run's overlays, its sampled loop and the points of a study share them).
 _JACOBIAN_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -93,6 +95,9 @@ class RunAnalysis:
     sampled : dict of str to linear.SampledLoop
         The models of ``models`` closed with the law held over its control period.
     eig_sweep : linearize.EigenSweep or None
+    levels : critical_speeds.LevelComparison or None
+        The critical and characteristic speeds of the run's car per model level, FWS and
+        with the run's law (with the model overlays).
     unavailable : dict of str to str
         Metric -> why it could not be computed.
     notes : list of str
@@ -121,6 +126,7 @@ class RunAnalysis:
     modes: identify.IdentifiedModes | None = None
     sampled: dict[str, linear.SampledLoop] = field(default_factory=dict)
     eig_sweep: linearize.EigenSweep | None = None
+    levels: critical_speeds.LevelComparison | None = None
     unavailable: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     #: What the bag says of its completeness: ``complete``, ``unverified`` (no accounting in
@@ -190,6 +196,8 @@ class RunAnalysis:
             out["iso3888_lane_change"] = self.lane_change.to_dict()
         if self.modes is not None:
             out["identified_modes"] = self.modes.to_dict()
+        if self.levels is not None:
+            out["critical_speeds_by_model_level"] = self.levels.to_dict()
         if self.models:
             out["model_eigenvalues_per_s"] = {
                 k: [[float(e.real), float(e.imag)] for e in _lateral_modes(m.poles())]
@@ -390,6 +398,20 @@ def _sampled_models(res: RunAnalysis, vehicle: Any, speed: float, period: float,
             res.sampled[model] = loop
 
 
+def _levels(res: RunAnalysis, vehicle: Any, belief: Any,
+            options: Mapping[str, Any]) -> critical_speeds.LevelComparison | None:
+    """Every model level's critical and characteristic speeds of the run's car, FWS and its
+    law (built as the run built it), shared by the runs of one car and law."""
+    key = json.dumps([vehicle.cache_key(), res.law,
+                      belief.cache_key() if belief is not None else None, dict(options)],
+                     sort_keys=True, default=str)
+    if key not in _LEVELS_CACHE:
+        _LEVELS_CACHE[key] = _try(res, "critical_speeds", lambda: critical_speeds.compare_levels(
+            vehicle, make_law(res.law, belief if belief is not None else vehicle,
+                              **dict(options))))
+    return _LEVELS_CACHE[key]
+
+
 def _try(result: RunAnalysis, metric: str, fn: Callable[[], Any]) -> Any:
     try:
         return fn()
@@ -465,6 +487,8 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
                 res.models["8dof-lin"] = sys8
         if period is not None:
             _sampled_models(res, vehicle, speed, period, belief, options)
+        tick(f"{run.name}: critical speeds per model level")
+        res.levels = _levels(res, vehicle, belief, options)
     elif not models:
         res.notes.append("linear model overlays not asked for")
 
@@ -502,7 +526,8 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
             responses = {k: ch[k] for k in ("yaw_rate_radps", "lateral_accel_mps2") if k in ch}
             res.step = _try(res, "iso7401_step", lambda: iso7401.step_metrics(
                 t, ch["front_wheel_angle_rad"], responses, ch.get("sideslip_rad"),
-                steering_wheel_rad=ch.get("steering_wheel_angle_rad")))
+                steering_wheel_rad=ch.get("steering_wheel_angle_rad"),
+                rear_wheel_rad=ch.get("rear_wheel_angle_rad")))
             if res.step is not None and res.steer_reference == "commanded":
                 win = (t >= res.step.hold_end_s - iso7401.STEADY_WINDOW_S) \
                     & (t <= res.step.hold_end_s)

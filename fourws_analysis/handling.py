@@ -17,6 +17,11 @@ form for the laws of chapter 4), and the law's *effective* understeer gradient i
 :math:`d\delta_f/da_y - L/U^2`. The speed where FWS and the law have equal slopes is
 eq. 4.107's :math:`U_{ss}` (12.99 m/s for Table 4.4 with Solution 1, analytically
 :math:`\sqrt{b L C_r/(m a)}`).
+
+These are the 2-DOF model's numbers (``axle_tires``, no roll). The report also gives the
+critical and characteristic speeds of every model level that applies side by side
+(:func:`fourws_analysis.critical_speeds.compare_levels`: 2-DOF, 3-DOF with roll steer, 8-DOF
+linearized) with the reasons they differ; its 2-DOF entry is the one the 2-DOF keys hold.
 """
 
 from __future__ import annotations
@@ -28,7 +33,9 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.optimize
 
-from fourws_analysis.linear import closed_loop, critical_speed, steady_state_gains
+from fourws_analysis import critical_speeds
+from fourws_analysis.critical_speeds import LevelComparison
+from fourws_analysis.linear import closed_loop, steady_state_gains
 from fourws_control.base import Law, check_speed
 from fourws_control.bicycle import bicycle
 from fourws_control.registry import make_law
@@ -173,7 +180,8 @@ class SlopeRow:
 
 @dataclass(frozen=True)
 class HandlingReport:
-    """What ``fourws handling`` prints (FWS vehicle properties and the law's comparison)."""
+    """What ``fourws handling`` prints: the 2-DOF model's FWS properties and the law's
+    comparison (``speeds_model_level``), and every level's speeds side by side (``levels``)."""
 
     vehicle: str
     law: str
@@ -183,6 +191,9 @@ class HandlingReport:
     law_critical_speed_mps: float | None
     equal_slope_speed_mps: float | None
     slopes: list[SlopeRow] = field(default_factory=list)
+    levels: LevelComparison = field(default_factory=LevelComparison)
+    #: The model level of the speeds and gradient above (the levels' entry with this name).
+    speeds_model_level: str = "2dof"
 
     @property
     def understeer_gradient_deg_per_g(self) -> float:
@@ -205,15 +216,20 @@ class HandlingReport:
                 "critical_speed_mps": self.critical_speed_mps,
                 "law_critical_speed_mps": self.law_critical_speed_mps,
                 "equal_slope_speed_mps": self.equal_slope_speed_mps,
-                "slopes": [s.to_dict() for s in self.slopes]}
+                "slopes": [s.to_dict() for s in self.slopes],
+                "speeds_model_level": self.speeds_model_level,
+                **self.levels.to_dict()}
 
 
 def handling_report(vehicle: Vehicle, law: Law | str = "fws",
                     speeds_mps: Sequence[float] = DEFAULT_SLOPE_SPEEDS_MPS) -> HandlingReport:
-    """Understeer gradient, characteristic/critical speed, equal-slope speed and slopes."""
+    """Understeer gradient, characteristic/critical speed, equal-slope speed and slopes (the
+    2-DOF model), and every model level's speeds side by side."""
     law_obj = make_law(law, vehicle) if isinstance(law, str) else law
-    char, crit = characteristic_speeds(vehicle)
-    law_crit = critical_speed("2dof", vehicle, law_obj).critical_speed_mps
+    levels = critical_speeds.compare_levels(vehicle, law_obj)
+    two = levels.by_level("2dof")
+    char, crit, law_crit = (two.characteristic_speed_mps, two.critical_speed_mps,
+                            two.law_critical_speed_mps)
     u_ss = equal_slope_speed(vehicle, law_obj)
     rows = []
     per_g = math.degrees(1.0) * GRAVITY_MPS2
@@ -228,4 +244,4 @@ def handling_report(vehicle: Vehicle, law: Law | str = "fws",
                              None if s_law is None else s_law * per_g,
                              None if s_law is None else (s_law - L / (u * u)) * per_g))
     return HandlingReport(vehicle.name, law_obj.name, understeer_gradient(vehicle), char, crit,
-                          law_crit, u_ss, rows)
+                          law_crit, u_ss, rows, levels)

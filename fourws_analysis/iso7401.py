@@ -14,6 +14,19 @@ For a response ``y`` (yaw rate or lateral acceleration) with steady-state value 
 For a second-order response ``y = K(1 - e^{-\zeta\omega_n t}(\cos\omega_d t +
 \zeta/\sqrt{1-\zeta^2}\sin\omega_d t))`` these give a peak time ``pi/omega_d`` and an overshoot
 ``exp(-zeta pi / sqrt(1 - zeta^2))`` (tested in ``test/test_analysis_iso.py``).
+
+ISO 7401's step test is run at a steady lateral acceleration of
+:data:`ISO_LATERAL_ACCEL_MPS2` (4 m/s^2); a step of any other size gives the same metrics at
+another point of the tires' curves, not the ISO condition.
+
+Spike rule (lateral acceleration). A car's own lateral acceleration builds up with its yaw
+and sideslip, on the time scale of the yaw rate's rise (its peak response time). An
+overshoot of ``a_y`` whose peak comes earlier than half that rise, and whose excursion above
+the steady state is narrower (full width at half the overshoot) than half that rise, is
+driven by something faster than the car's response: a steer input acting on the tires
+directly (a rear-steer law's command through its actuator, or the front steer ramp). It is
+flagged (:attr:`StepMetrics.spike`, with the rear-wheel motion in that window when the rear
+angle is given) instead of being read as the car's damping.
 """
 
 from __future__ import annotations
@@ -38,6 +51,14 @@ MIN_STEP_FRACTION = 0.5
 #: The straight-running baseline is taken before the steer leaves its initial value by this
 #: fraction of the step (noise on a recorded steer stays well below it).
 BASELINE_STEER_FRACTION = 0.01
+#: ISO 7401's steady lateral acceleration of the step-steer test, m/s^2.
+ISO_LATERAL_ACCEL_MPS2 = 4.0
+#: Spike rule (module docstring): the a_y peak time and the width of its excursion, each as a
+#: fraction of the yaw rate's peak response time, below which the overshoot is a spike.
+SPIKE_FRACTION_OF_YAW_RISE = 0.5
+#: Rear-wheel motion within the spike, as a fraction of the front step, from which the rear
+#: steer is named as its cause.
+SPIKE_REAR_FRACTION = 0.1
 
 
 @dataclass
@@ -61,6 +82,9 @@ class StepMetrics:
     steady_state_gain_steering_wheel : float or None
         Steady-state response per steady-state steering-wheel angle δH (channel unit per
         rad), when the steering-wheel angle was given.
+    spike : str
+        Non-empty when the overshoot is a spike (lateral acceleration, module docstring):
+        what the spike is and its cause.
     """
 
     channel: str
@@ -72,6 +96,7 @@ class StepMetrics:
     settled: bool
     notes: list[str] = field(default_factory=list)
     steady_state_gain_steering_wheel: float | None = None
+    spike: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping; keys name their units (:mod:`fourws_analysis.units`)."""
@@ -83,6 +108,7 @@ class StepMetrics:
             "response_time_s": self.response_time_s,
             "peak_response_time_s": self.peak_response_time_s,
             "overshoot_fraction": self.overshoot, "settled": self.settled,
+            "overshoot_is_spike": bool(self.spike), "spike": self.spike,
             "notes": list(self.notes)}
 
 
@@ -153,7 +179,8 @@ def find_step(time_s: np.ndarray, steer: np.ndarray) -> tuple[int, int, float, f
 def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.ndarray],
                  sideslip_rad: np.ndarray | None = None,
                  steady_window_s: float = STEADY_WINDOW_S,
-                 steering_wheel_rad: np.ndarray | None = None) -> StepResult:
+                 steering_wheel_rad: np.ndarray | None = None,
+                 rear_wheel_rad: np.ndarray | None = None) -> StepResult:
     """ISO 7401 metrics of a step-steer run.
 
     Parameters
@@ -170,6 +197,9 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
         Window at the end of the hold averaged for the steady state, s.
     steering_wheel_rad : ndarray, optional
         Steering-wheel angle δH, rad: the gains per δH are computed over the same window.
+    rear_wheel_rad : ndarray, optional
+        Rear road-wheel angle, rad: names the rear steer as a spike's cause when it moves
+        within the spike.
 
     Raises
     ------
@@ -196,6 +226,7 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
         hand = np.asarray(steering_wheel_rad, dtype=float)
         hand_ss = float(np.mean(hand[win])) - float(hand[0])
     out: dict[str, StepMetrics] = {}
+    curves: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}
     notes: list[str] = []
     for name, y in responses.items():
         y = np.asarray(y, dtype=float)
@@ -221,6 +252,13 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
             m_notes.append("not settled over the steady window (varies by more than 2 %)")
         out[name] = StepMetrics(name, yss, yss / steer_ss, rt, pt, over, settled, m_notes,
                                 None if not hand_ss else yss / hand_ss)
+        curves[name] = (ts, ys, a)
+    ay, yaw_m = out.get("lateral_accel_mps2"), out.get("yaw_rate_radps")
+    if ay is not None and yaw_m is not None:
+        rise = yaw_m.peak_response_time_s or yaw_m.response_time_s
+        ts, ys, a = curves["lateral_accel_mps2"]
+        ay.spike = spike_of(ts, ys, a, ay.peak_response_time_s, ay.overshoot, rise, t0, step,
+                            t, rear_wheel_rad)
     tb = None
     yaw = out.get("yaw_rate_radps")
     if sideslip_rad is not None and yaw is not None and yaw.peak_response_time_s is not None:
@@ -231,6 +269,50 @@ def step_metrics(time_s: np.ndarray, steer: np.ndarray, responses: dict[str, np.
     elif sideslip_rad is not None:
         notes.append("TB factor needs a yaw-rate peak response time")
     return StepResult(t0, step, out, tb, notes, float(t[end - 1]))
+
+
+def spike_of(ts: np.ndarray, ys: np.ndarray, steady: float, peak_time_s: float | None,
+             overshoot: float | None, yaw_rise_s: float | None, t0_s: float, step: float,
+             time_s: np.ndarray | None = None, rear_wheel_rad: np.ndarray | None = None
+             ) -> str:
+    """The spike rule of the module docstring for one response: ``ts`` (s from t0) and
+    ``ys`` (the response less its baseline, sign of its steady state ``steady > 0``), its peak
+    time and overshoot, the yaw rate's rise ``yaw_rise_s`` (s). Returns what the spike is and
+    its cause, or ``""`` when the overshoot is the car's own.
+    """
+    if None in (peak_time_s, overshoot, yaw_rise_s) or not overshoot > 0.0 \
+            or not steady > 0.0:
+        return ""
+    assert peak_time_s is not None and overshoot is not None and yaw_rise_s is not None
+    limit = SPIKE_FRACTION_OF_YAW_RISE * yaw_rise_s
+    if not peak_time_s < limit:
+        return ""
+    half = steady * (1.0 + 0.5 * overshoot)
+    k = int(np.argmin(np.abs(ts - peak_time_s)))
+    above = ys >= half
+    lo = k
+    while lo > 0 and above[lo - 1]:
+        lo -= 1
+    hi = k
+    while hi < ys.size - 1 and above[hi + 1]:
+        hi += 1
+    width = float(ts[min(hi + 1, ts.size - 1)] - ts[max(lo - 1, 0)])
+    if not width < limit:
+        return ""
+    text = (f"one spike {peak_time_s:.2f} s after the step, {width:.2f} s wide, both within "
+            f"half the yaw rate's rise ({yaw_rise_s:.2f} s): not the car's yaw-sideslip "
+            "response")
+    if rear_wheel_rad is not None and time_s is not None:
+        rear = np.asarray(rear_wheel_rad, dtype=float)
+        window = (time_s >= t0_s - 0.5 * peak_time_s) & (time_s <= t0_s + peak_time_s + width)
+        seg = rear[window] - float(rear[0])
+        if seg.size and float(np.ptp(seg)) > SPIKE_REAR_FRACTION * abs(step):
+            return (text + f"; cause: the rear-steer command, the rear wheels move between "
+                    f"{math.degrees(float(seg.min())):+.2f} and "
+                    f"{math.degrees(float(seg.max())):+.2f} deg in that time (the law's "
+                    f"response to the steer step through its actuator)")
+    return text + "; cause: the steer ramp itself (the tires' force follows the steer input " \
+        "before the car yaws)"
 
 
 def _first_crossing(t: np.ndarray, y: np.ndarray, level: float) -> float | None:

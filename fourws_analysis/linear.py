@@ -941,6 +941,8 @@ class LinearReport:
         if self.critical_speed is not None:
             out["critical_speed_mps"] = self.critical_speed.critical_speed_mps
             out["critical_speed_search"] = self.critical_speed.to_dict()
+            # the model level behind the number (fourws_analysis.critical_speeds.LEVELS)
+            out["critical_speed_model_level"] = self.model
         return out
 
 

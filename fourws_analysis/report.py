@@ -30,8 +30,9 @@ from fourws_analysis.report_figures import (EIG_PLOT_MIN_REAL, plot_bode, plot_e
 from fourws_analysis.report_standards import (law_verdicts, plot_free_steer,
                                               plot_sine_with_dwell, standards_tables,
                                               verdict_items)
-from fourws_analysis.report_texts import (MODEL_NAMES, identification_notes, law_groups,
-                                          reading_notes, run_label, stability_notes)
+from fourws_analysis.report_texts import (MODEL_NAMES, car_notes, identification_notes,
+                                          law_groups, reading_notes, run_label, run_step_title,
+                                          spike_notes, stability_notes)
 
 Progress = Callable[[str], None]
 
@@ -124,10 +125,12 @@ def metric_tables(runs: Sequence[RunAnalysis]) -> list[tuple[str, list[TableRow]
             (f"{out.label} {out.symbol}: overshoot", "%",
              lambda r, c=c: None if r.step.responses[c].overshoot is None
              else 100.0 * r.step.responses[c].overshoot),
+            (f"{out.label} {out.symbol}: overshoot is one spike (see the first lines)", "–",
+             lambda r, c=c: "yes" if r.step.responses[c].spike else None),
         ]
     specs.append(("TB factor (peak time × steady sideslip)", "s·deg",
                   lambda r: r.step.tb_factor_s_deg))
-    tables.append(("ISO 7401 step response", _collect(runs, specs)))
+    tables.append((run_step_title(runs), _collect(runs, specs)))
 
     specs = []
     for out in units.OUTPUTS.values():
@@ -239,7 +242,7 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
                 "with the run's law and the 8-DOF linearized at the run's straight-running "
                 "trim; one colour per run, one line style per source. Phase lines are not "
                 "joined across a jump of more than 90 deg (a wrap or a zero on the jω axis)."),
-               ("ISO 7401 step response", plot_step, "step.png", ""),
+               (run_step_title(runs), plot_step, "step.png", ""),
                ("ISO 4138 steady-state handling", plot_steady_state, "steady_state.png", ""))
 
     def draw(fn: Callable[[Sequence[RunAnalysis], Path], Path | None],
@@ -286,6 +289,9 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>fourws analysis</title>"
              f"<style>{_CSS}</style></head><body><h1>fourws: analysis of "
              f"{len(runs)} recorded run(s)</h1>"]
+    first = car_notes(runs) + spike_notes(runs)
+    if first:  # what the car is and what a number is not, before any number
+        parts.append("<h2>The car and the runs</h2>" + _list_html(first, "reading"))
     if runs:
         parts.append("<h2>How to read the numbers</h2>"
                      + _list_html(reading_notes(runs), "reading"))

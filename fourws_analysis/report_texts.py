@@ -8,19 +8,112 @@ the imaginary axis and why identified eigenvalues differ from the models' (plain
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from fourws_analysis import units
 from fourws_analysis.compare import RunAnalysis
+from fourws_analysis.critical_speeds import LEVELS, LevelComparison
 from fourws_analysis.iso4138 import LINEAR_RANGE_MPS2
+from fourws_analysis.iso7401 import ISO_LATERAL_ACCEL_MPS2
 
 #: A real part above this is "right of the imaginary axis" (1/s): the zero eigenvalues of
 #: position and heading are removed before, and round-off of the others is ~1e-12.
 UNSTABLE_REAL_PER_S = 1e-9
-#: Words for each model overlay.
-MODEL_NAMES = {"2dof": "2-DOF model", "3dof": "3-DOF model", "8dof-lin": "8-DOF linearized"}
+#: Words for each model overlay (the model levels of fourws_analysis.critical_speeds).
+MODEL_NAMES = {"2dof": "2-DOF model", "3dof": "3-DOF model", "8dof-lin": LEVELS["8dof-lin"]}
+#: Relative tolerance on a step's target lateral acceleration to count as ISO 7401's.
+_ISO_TARGET_RTOL = 1e-6
+
+
+def _kmh(speed_mps: float | None) -> str:
+    return "none" if speed_mps is None else f"{speed_mps:.3g} m/s ({speed_mps * 3.6:.0f} km/h)"
+
+
+def run_step_title(runs: Sequence[RunAnalysis]) -> str:
+    """:func:`step_title` of the step runs of ``runs``."""
+    steps = [r for r in runs if r.step is not None]
+    return step_title([r.run.config.get("maneuver") for r in steps],
+                      [r.step.responses["lateral_accel_mps2"].steady_state
+                       if "lateral_accel_mps2" in r.step.responses else None for r in steps])
+
+
+def step_title(maneuvers: Sequence[object], steady_ay_mps2: Sequence[float | None]) -> str:
+    """Title of the step-response table and figure: ISO 7401's only when every step run was
+    made at its steady lateral acceleration (the maneuver's ``target_lateral_accel_mps2`` is
+    :data:`fourws_analysis.iso7401.ISO_LATERAL_ACCEL_MPS2`, as scenario iso7401_step_4mps2
+    has it), else a step-steer response that says it is not the ISO condition and what it
+    was (the runs' steady |a_y|, m/s^2).
+
+    Parameters
+    ----------
+    maneuvers : sequence of mapping
+        The step runs' maneuver descriptions (run configuration ``maneuver``).
+    steady_ay_mps2 : sequence of float or None
+        Their steady lateral accelerations, m/s^2.
+    """
+    iso = ISO_LATERAL_ACCEL_MPS2
+    targets = [m.get("target_lateral_accel_mps2") if isinstance(m, Mapping) else None
+               for m in maneuvers]
+    at_iso = [isinstance(t, (int, float)) and math.isclose(t, iso, rel_tol=_ISO_TARGET_RTOL)
+              for t in targets]
+    if targets and all(at_iso):
+        return f"ISO 7401 step response (steady a_y {iso:g} m/s²)"
+    ay = sorted(abs(a) for a in steady_ay_mps2 if a is not None and math.isfinite(a))
+    what = ("" if not ay else f"steady a_y {ay[0]:.2g} m/s²" if len(ay) == 1 or
+            round(ay[0], 1) == round(ay[-1], 1) else f"steady a_y {ay[0]:.2g}-{ay[-1]:.2g} m/s²")
+    given = [t for t in targets if isinstance(t, (int, float))]
+    how = (f"target {', '.join(f'{t:g}' for t in sorted(set(given)))} m/s², " if given
+           else "a given steer, ")
+    return (f"Step-steer response with ISO 7401's metrics — not the ISO 7401 condition "
+            f"(steady a_y {iso:g} m/s²): {how}{what}".rstrip(", "))
+
+
+def level_notes(levels: LevelComparison, vehicle: str) -> list[str]:
+    """The report's first lines on the car: where roll steer makes an understeering tire set
+    an oversteering car, and the critical and characteristic speeds of every model level
+    (FWS), named by level."""
+    parts = []
+    for lv in levels.levels:
+        if lv.unavailable:
+            continue
+        speed = (f"critical speed {_kmh(lv.critical_speed_mps)}"
+                 if lv.steer_character == "oversteer" else
+                 f"characteristic speed {_kmh(lv.characteristic_speed_mps)}")
+        parts.append(f"{lv.label} {lv.steer_character}, {speed}")
+    out = []
+    if levels.roll_steer_oversteer:
+        out.append(f"{vehicle}: roll steer makes the understeering tire set an oversteering "
+                   "car.")
+    if parts:
+        out.append(f"{vehicle} with FWS, by model level: " + "; ".join(parts) + ". "
+                   + " ".join(levels.why))
+    return out
+
+
+def car_notes(runs: Sequence[RunAnalysis]) -> list[str]:
+    """:func:`level_notes` of each car of ``runs`` (once per car)."""
+    seen: set[str] = set()
+    out: list[str] = []
+    for r in runs:
+        if r.levels is None or r.vehicle is None or r.vehicle.cache_key() in seen:
+            continue
+        seen.add(r.vehicle.cache_key())
+        out += level_notes(r.levels, r.vehicle.name)
+    return out
+
+
+def spike_notes(runs: Sequence[RunAnalysis]) -> list[str]:
+    """One sentence per step run whose lateral-acceleration overshoot is a spike
+    (:func:`fourws_analysis.iso7401.spike_of`)."""
+    out = []
+    for r in runs:
+        ay = r.step.responses.get("lateral_accel_mps2") if r.step is not None else None
+        if ay is not None and ay.spike and ay.overshoot is not None:
+            out.append(f"{run_label(r)}: the lateral-acceleration overshoot "
+                       f"({100.0 * ay.overshoot:.0f} %) is {ay.spike}.")
+    return out
 
 
 def run_label(r: RunAnalysis) -> str:
@@ -182,11 +275,16 @@ def stability_notes(members: Sequence[RunAnalysis]) -> list[str]:
         worst = np.array([np.nanmax(row.real) if np.any(np.isfinite(row)) else np.nan
                           for row in ev])
         bad = worst > UNSTABLE_REAL_PER_S
+        crit = None
+        if first.levels is not None:
+            crit = first.levels.by_level("8dof-lin").law_critical_speed_mps
         if np.any(bad):
             k = int(np.nanargmax(worst))
             k0 = int(np.argmax(bad))
             where = (f"from {v[k0]:.3g} m/s ({v[k0] * 3.6:.0f} km/h) up" if np.all(bad[k0:])
                      else "at " + ", ".join(f"{x:.3g}" for x in v[bad]) + " m/s")
+            if crit is not None:
+                where += f" (critical speed {_kmh(crit)})"
             elsewhere = f"8-DOF linearized {where}"
             details.append(f"8-DOF linearized over {v.min():.3g}-{v.max():.3g} m/s: a mode "
                            f"right of the imaginary axis {where}, largest real part "

@@ -14,6 +14,8 @@ Output (``--json``; keys are stable)::
      "controllability": {...}, "law_gains": {...},
      "lyapunov": {"stable", "leading_minors"}   (chapter 5: A^T P + P A = -I, Sylvester),
      "critical_speed_mps": float or null        (with --critical-speed),
+     "critical_speed_model_level": the model   (with --critical-speed: the level of that
+                                                 number, as fourws handling names it),
      "critical_speed_8dof_free": {...}          (with --model 2dof-free --critical-speed: the
                                                  free-control critical speed of the linearized
                                                  8-DOF with its steering system, same car and
@@ -68,6 +70,7 @@ def _c(z: list[float]) -> str:
 def run(args: argparse.Namespace) -> int:
     """Run the analysis and print it; returns the exit code."""
     from fourws_analysis import linear  # scipy, control: not for --help
+    from fourws_analysis.critical_speeds import LEVELS
 
     speed = speed_kmh("--speed-kmh", args.speed_kmh) / KMH_PER_MPS
     low, high = (speed_mps("--speed-range-mps", v) for v in args.speed_range_mps)
@@ -125,8 +128,10 @@ def run(args: argparse.Namespace) -> int:
     if args.critical_speed:
         cs = out["critical_speed_mps"]
         lo, hi = out["critical_speed_search"]["searched_range_mps"]
-        print("critical speed: " + (f"{cs:.3f} m/s ({cs * KMH_PER_MPS:.1f} km/h)" if cs
-                                    is not None else f"none (stable {lo:g}-{hi:g} m/s)"))
+        level = LEVELS.get(args.model, f"{args.model} model")
+        print(f"critical speed ({level}): " + (
+            f"{cs:.3f} m/s ({cs * KMH_PER_MPS:.1f} km/h)" if cs is not None
+            else f"none (stable {lo:g}-{hi:g} m/s)"))
     if "critical_speed_8dof_free" in out:
         free = out["critical_speed_8dof_free"]
         cs = free["critical_speed_mps"]

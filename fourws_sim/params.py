@@ -357,6 +357,196 @@ class Steering:
                                        bounds=(0.0, 1e4))
 
 
+#: Bounds of the TMeasy force-characteristic values (N): a 1:28 scale car's tire to a heavy
+#: truck's at twice its nominal load.
+_TMEASY_FORCE_BOUNDS = (0.01, 1e6)
+#: Bounds of the TMeasy slip values (dimensionless slip at the peak, where sliding begins,
+#: where the trail changes sign or ends).
+_TMEASY_SLIP_BOUNDS = (1e-4, 10.0)
+
+
+def _tm_force(doc: str, default: float) -> Any:
+    return _spec(doc=doc, default=default, bounds=_TMEASY_FORCE_BOUNDS)
+
+
+def _tm_slope(doc: str, default: float) -> Any:
+    return _spec(doc=doc, default=default, bounds=(1.0, 1e8))
+
+
+def _tm_slip(doc: str, default: float) -> Any:
+    return _spec(doc=doc, default=default, bounds=_TMEASY_SLIP_BOUNDS)
+
+
+@dataclass(frozen=True)
+class TMeasy:
+    """Parameters of the TMeasy tire (``tire.tmeasy``; :mod:`fourws_sim.tires.tmeasy`).
+
+    TMeasy (Hirschberg, Rill, Weinfurter, Vehicle System Dynamics 45, 2007; Rill, *Road
+    Vehicle Dynamics*, CRC Press, 2012) describes each pure-slip force characteristic by its
+    initial slope ``dF0``, maximum ``F_M`` at slip ``s_M``, and sliding value ``F_S`` from slip
+    ``s_S`` on, given at the nominal load ``F_z^N`` (``_pn``) and at twice it (``_p2n``): the
+    forces and slopes are interpolated quadratically in the load, the slips linearly, as
+    TMeasy does. Forces in N, slopes in N per unit slip; TMeasy slips are slip velocity over
+    rolling speed (``s_x = kappa``, ``s_y = -tan(alpha)`` at free rolling). The aligning
+    torque is ``-n F_y`` with the pneumatic trail ``n = L (n/L)(s_y)``, ``L = 2 sqrt(r0 dz)``
+    the contact length from the unloaded radius and the static deflection ``dz`` under the
+    progressive vertical stiffness given at the two loads.
+
+    Defaults: the HMMWV tire of Chrono::Vehicle (``data/vehicle/hmmwv/tire/
+    HMMWV_TMeasy_converted.json``, BSD-3-Clause). In a file ``tire.tmeasy.json`` names a
+    Chrono::Vehicle or LFDM TMeasy JSON file (relative to the vehicle file) whose values fill
+    the fields the block does not give (:func:`fourws_sim.tires.tmeasy.read_json` lists the
+    keys read).
+    """
+
+    nominal_load_n: float = _spec(doc="F_z^N, nominal load (pn)", default=7600.0,
+                                  bounds=(1.0, 2e5))
+    maximum_load_n: float = _spec(doc="load above which the characteristics are held "
+                                      "(pn_max; Chrono and LFDM: 3.5 pn)", default=26600.0,
+                                  bounds=(1.0, 1e6))
+    unloaded_radius_m: float = _spec(doc="r0, unloaded radius (contact length)",
+                                     default=0.464, bounds=(0.01, 2.0))
+    vertical_stiffness_pn_n_per_m: float = _spec(doc="c_z at the nominal load",
+                                                 default=326332.4234, bounds=(10.0, 1e8))
+    vertical_stiffness_p2n_n_per_m: float = _spec(doc="c_z at twice the nominal load",
+                                                  default=326332.4234, bounds=(10.0, 1e8))
+    dfx0_pn_n: float = _tm_slope("dF_x^0, initial longitudinal slope at pn", 157030.738840308)
+    dfx0_p2n_n: float = _tm_slope("dF_x^0 at 2 pn", 274685.069847482)
+    fxm_pn_n: float = _tm_force("F_x^M, longitudinal maximum at pn", 6894.765328626913)
+    fxm_p2n_n: float = _tm_force("F_x^M at 2 pn", 11973.78061414796)
+    sxm_pn: float = _tm_slip("s_x^M, slip of the longitudinal maximum at pn", 0.1337681868200464)
+    sxm_p2n: float = _tm_slip("s_x^M at 2 pn", 0.1634000724558567)
+    fxs_pn_n: float = _tm_force("F_x^S, longitudinal sliding force at pn", 5692.145971941859)
+    fxs_p2n_n: float = _tm_force("F_x^S at 2 pn", 10765.232472159529)
+    sxs_pn: float = _tm_slip("s_x^S, slip where longitudinal sliding begins at pn",
+                             0.959999390695378)
+    sxs_p2n: float = _tm_slip("s_x^S at 2 pn", 0.9599349397154496)
+    dfy0_pn_n: float = _tm_slope("dF_y^0, initial lateral slope (cornering stiffness) at pn",
+                                 55087.49318774042)
+    dfy0_p2n_n: float = _tm_slope("dF_y^0 at 2 pn", 102058.29431565656)
+    fym_pn_n: float = _tm_force("F_y^M, lateral maximum at pn", 5948.424247065884)
+    fym_p2n_n: float = _tm_force("F_y^M at 2 pn", 11335.717829523435)
+    sym_pn: float = _tm_slip("s_y^M, slip of the lateral maximum at pn", 0.3794817785000966)
+    sym_p2n: float = _tm_slip("s_y^M at 2 pn", 0.3775168408962764)
+    fys_pn_n: float = _tm_force("F_y^S, lateral sliding force at pn", 5648.517057661229)
+    fys_p2n_n: float = _tm_force("F_y^S at 2 pn", 10693.243250366206)
+    sys_pn: float = _tm_slip("s_y^S, slip where lateral sliding begins at pn", 0.925640996144482)
+    sys_p2n: float = _tm_slip("s_y^S at 2 pn", 0.959833720945494)
+    nto0_pn: float = _spec("nonnegative", doc="(n/L)_0, trail per contact length at zero slip, "
+                                              "pn (0 = no aligning torque)", default=0.13,
+                           bounds=(0.0, 1.0))
+    nto0_p2n: float = _spec("nonnegative", doc="(n/L)_0 at 2 pn", default=0.167,
+                            bounds=(0.0, 1.0))
+    synto0_pn: float = _tm_slip("s_y^0, lateral slip where the trail changes sign, pn",
+                                0.3984558674251015)
+    synto0_p2n: float = _tm_slip("s_y^0 at 2 pn", 0.3963926829410902)
+    syntoe_pn: float = _tm_slip("s_y^E, lateral slip where the trail ends, pn",
+                                0.6792276290602397)
+    syntoe_p2n: float = _tm_slip("s_y^E at 2 pn", 0.6781638113282699)
+
+    #: (force, slip) field stems of the two pure-slip characteristics.
+    CURVES: ClassVar[tuple[str, str]] = ("x", "y")
+    #: Fields interpolated quadratically in the load (forces, slopes); the others linearly.
+    QUADRATIC: ClassVar[tuple[str, ...]] = ("dfx0", "fxm", "fxs", "dfy0", "fym", "fys")
+    LINEAR: ClassVar[tuple[str, ...]] = ("sxm", "sxs", "sym", "sys", "nto0", "synto0",
+                                         "syntoe")
+
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
+        """The relations TMeasy needs: loads ordered, a progressive vertical stiffness, the
+        sliding slip beyond the peak slip and the sliding force at most the maximum at both
+        loads, and every interpolated value positive from zero to the maximum load."""
+        def refuse(name: str, problem: str) -> None:
+            raise ParameterError(f"{prefix}{name}", problem, source)
+
+        if not self.maximum_load_n >= self.nominal_load_n:
+            refuse("maximum_load_n", f"must be >= nominal_load_n ({self.nominal_load_n:g} N), "
+                                     f"got {self.maximum_load_n:g}")
+        c1, c2 = self.vertical_stiffness_pn_n_per_m, self.vertical_stiffness_p2n_n_per_m
+        if not c1 <= c2 < math.sqrt(2.0) * c1:
+            refuse("vertical_stiffness_p2n_n_per_m",
+                   f"must lie within [c_z(pn), sqrt(2) c_z(pn)) = [{c1:g}, "
+                   f"{math.sqrt(2.0) * c1:g}) (a progressive F_z(dz) = a1 dz + a2 dz^2 with "
+                   f"a1, a2 >= 0), got {c2:g}")
+        for axis in self.CURVES:
+            for load in ("pn", "p2n"):
+                sm, ss = getattr(self, f"s{axis}m_{load}"), getattr(self, f"s{axis}s_{load}")
+                if not ss > sm:
+                    refuse(f"s{axis}s_{load}", f"must exceed s{axis}m_{load} ({sm:g}), got {ss:g}")
+                fm, fs = (getattr(self, f"f{axis}m_{load}_n"), getattr(self, f"f{axis}s_{load}_n"))
+                if not fs <= fm:
+                    refuse(f"f{axis}s_{load}_n", f"must be at most f{axis}m_{load}_n ({fm:g} N), "
+                                                 f"got {fs:g}")
+            if not self.syntoe_pn > self.synto0_pn or not self.syntoe_p2n > self.synto0_p2n:
+                refuse("syntoe_pn", "the slip where the trail ends must exceed the slip where "
+                                    "it changes sign (synto0) at both loads")
+        x_max = self.maximum_load_n / self.nominal_load_n
+        for stem in self.QUADRATIC:
+            w1, w2 = getattr(self, f"{stem}_pn_n"), getattr(self, f"{stem}_p2n_n")
+            # Y(x) = x (2 w1 - w2/2 - (w1 - w2/2) x) > 0 on (0, x_max]: the bracket is linear
+            # in x, so positive at both ends
+            if not (2.0 * w1 - 0.5 * w2 > 0.0 and 2.0 * w1 - 0.5 * w2 - (w1 - 0.5 * w2) * x_max
+                    > 0.0):
+                refuse(f"{stem}_p2n_n", f"with {stem}_pn_n = {w1:g} N its quadratic "
+                                        f"interpolation is not positive at every load up to "
+                                        f"maximum_load_n ({self.maximum_load_n:g} N)")
+        for stem in self.LINEAR:
+            w1, w2 = getattr(self, f"{stem}_pn"), getattr(self, f"{stem}_p2n")
+            low = min(2.0 * w1 - w2, w1 + (w2 - w1) * (x_max - 1.0))
+            if not (low > 0.0 or (stem == "nto0" and low >= 0.0)):
+                refuse(f"{stem}_p2n", f"with {stem}_pn = {w1:g} its linear interpolation is "
+                                      f"not positive at every load up to maximum_load_n "
+                                      f"({self.maximum_load_n:g} N)")
+
+
+#: Key of ``tire.tmeasy`` naming a Chrono::Vehicle or LFDM TMeasy JSON file.
+TMEASY_JSON_KEY = "json"
+
+
+def tmeasy_from_mapping(values: Mapping[str, Any], source: str | None,
+                        prefix: str = "tire.tmeasy.",
+                        unchecked: frozenset[str] = frozenset()) -> TMeasy:
+    """Validate a ``tire.tmeasy`` mapping (without its ``json`` key) into :class:`TMeasy`;
+    missing fields take the defaults.
+
+    Raises
+    ------
+    ParameterError
+        An unknown field, a bad value or a broken relation (see ``TMeasy._check``).
+    """
+    return _from_mapping(TMeasy, values, source, prefix, unchecked)
+
+
+def _tmeasy_resolved(values: Any, source: str | None, prefix: str,
+                     unchecked: frozenset[str]) -> Mapping[str, Any]:
+    """``tire.tmeasy`` as validated: with a ``json`` file, every field (the block's own values
+    over the file's) and the file's resolved path, so that the vehicle's ``to_dict`` reloads
+    without the file; without one, the block as given."""
+    if not isinstance(values, Mapping):
+        raise ParameterError(prefix.rstrip("."), f"must be a mapping, got {describe(values)}",
+                             source)
+    own = {k: v for k, v in values.items() if k != TMEASY_JSON_KEY}
+    path = values.get(TMEASY_JSON_KEY)
+    names = [f.name for f in dataclasses.fields(TMeasy)]
+    if path is None:
+        tmeasy_from_mapping(own, source, prefix, unchecked)
+        return values
+    if not isinstance(path, str) or not path:
+        raise ParameterError(f"{prefix}{TMEASY_JSON_KEY}",
+                             f"must be a file path, got {describe(path)}", source)
+    where = Path(path).expanduser()
+    if not where.is_absolute() and source and Path(source).is_file():
+        where = Path(source).resolve().parent / where
+    merged = dict(own)
+    if any(name not in own for name in names):  # a complete block needs no file
+        from fourws_sim.tires import tmeasy  # numba: the tires load it (about 0.5 s)
+
+        loaded = tmeasy.read_json(where, f"{prefix}{TMEASY_JSON_KEY}", source)
+        merged = {**loaded, **own}
+    built = tmeasy_from_mapping(merged, source, prefix, unchecked)
+    return {**dataclasses.asdict(built), TMEASY_JSON_KEY: str(where)}
+
+
 @dataclass(frozen=True)
 class Tire:
     """Nonlinear tire choice and its coefficients (8-DOF and nonlinear 2-DOF models).
@@ -396,10 +586,11 @@ class Tire:
                                       bounds=(0.0, 0.5))
     sti: Mapping[str, float] = field(default_factory=dict)
     magic_formula: Mapping[str, float] = field(default_factory=dict)
+    tmeasy: Mapping[str, Any] = field(default_factory=dict)
 
     def _check(self, source: str | None, prefix: str,
                unchecked: frozenset[str] = frozenset()) -> None:
-        valid = ("linear", "sti", "magic_formula")
+        valid = ("linear", "sti", "magic_formula", "tmeasy")
         if self.model not in valid:
             raise ParameterError(f"{prefix}model", f"unknown tire model {describe(self.model)} "
                                                    f"(valid: {', '.join(valid)})", source)
@@ -416,6 +607,8 @@ class Tire:
                 # fitted coefficients: the tire module checks each one's sign; any magnitude
                 # beyond this is a slip of the pen (the largest shipped one is 4420)
                 check_plausible(name, float(v), TIRE_COEFFICIENT_BOUNDS, source, unchecked)
+        object.__setattr__(self, "tmeasy", _tmeasy_resolved(self.tmeasy, source,
+                                                            f"{prefix}tmeasy.", unchecked))
 
 
 @dataclass(frozen=True)
@@ -621,6 +814,7 @@ def _vehicle_bounded_fields(data: Mapping[str, Any]) -> set[str]:
     """Names ``unchecked_fields`` of a vehicle may list: every bounded subsystem field and
     the tire coefficients the file gives."""
     names = {n for key, cls in _SUBSYSTEMS.items() for n in bounded_fields(cls, f"{key}.")}
+    names.update(bounded_fields(TMeasy, "tire.tmeasy."))
     tire = data.get("tire")
     if isinstance(tire, Mapping):
         for group in ("sti", "magic_formula"):

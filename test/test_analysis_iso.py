@@ -64,6 +64,61 @@ def test_tb_factor_is_peak_time_times_sideslip() -> None:
     assert res.tb_factor_s_deg == pytest.approx(tp * 0.8, rel=3e-3)
 
 
+def _spike_run(bump_at_s: float, bump_width_s: float, bump_size: float,
+               rear_moves: bool = False) -> iso7401.StepResult:
+    """A step sampled at 100 Hz as a bag gives it: yaw rate a 2nd-order response (zeta 0.5,
+    wn 8 rad/s: peak time pi/wd = 0.453 s); lateral acceleration a 2nd-order response
+    (zeta 0.7, wn 6 rad/s: 4.6 % overshoot at 0.733 s) plus a Gaussian bump of
+    ``bump_size`` x its steady state at ``bump_at_s`` after the step, standard deviation
+    ``bump_width_s``; the rear angle steps by 0.5 x the front step at t0 when it moves."""
+    dt = 0.01
+    t = np.arange(0.0, 6.0, dt)
+    step = math.radians(1.5)
+    steer = step * np.clip((t - 0.5) / 0.1, 0.0, 1.0)  # 0.1 s ramp: t0 = 0.55 s
+    t0 = 0.55
+    yaw = second_order_step(t - t0, 0.5, 8.0, 0.1)
+    ay = second_order_step(t - t0, 0.7, 6.0, 2.0) \
+        + 2.0 * bump_size * np.exp(-0.5 * ((t - t0 - bump_at_s) / bump_width_s) ** 2)
+    rear = np.where(t >= t0, 0.5 * step, 0.0) if rear_moves else np.zeros_like(t)
+    return iso7401.step_metrics(t, steer, {"yaw_rate_radps": yaw, "lateral_accel_mps2": ay},
+                                rear_wheel_rad=rear)
+
+
+def test_lateral_acceleration_spike_is_flagged_with_its_cause() -> None:
+    """The spike rule (iso7401 module docstring): a_y peak earlier than half the yaw rate's
+    peak time (0.453 s / 2 = 0.227 s) and narrower (full width at half the overshoot) than
+    that. A bump at 0.08 s, sigma 0.015 s (FWHM 2.355 sigma = 0.035 s) is a spike; its cause
+    is the rear steer when the rear angle moves in that window, else the steer ramp."""
+    res = _spike_run(0.08, 0.015, 1.5, rear_moves=True)
+    yaw, ay = res.responses["yaw_rate_radps"], res.responses["lateral_accel_mps2"]
+    wd = 8.0 * math.sqrt(1 - 0.25)
+    assert yaw.peak_response_time_s == pytest.approx(math.pi / wd, abs=0.01)
+    assert ay.peak_response_time_s == pytest.approx(0.08, abs=0.01)
+    # peak: the 2nd-order part at 0.08 s plus the bump's 1.5 x the steady state
+    base = second_order_step(np.array([0.08]), 0.7, 6.0, 1.0)[0]
+    assert ay.overshoot == pytest.approx(base + 1.5 - 1.0, abs=0.05)
+    assert ay.spike.startswith("one spike 0.08 s after the step")
+    assert "rear-steer command" in ay.spike and "+0.75 deg" in ay.spike  # 0.5 x 1.5 deg
+    assert ay.to_dict()["overshoot_is_spike"] is True
+    assert "steer ramp itself" in _spike_run(0.08, 0.015, 1.5).responses[
+        "lateral_accel_mps2"].spike
+    assert yaw.spike == ""  # the rule is for the lateral acceleration
+
+
+@pytest.mark.parametrize("bump_at_s, bump_width_s, bump_size", [
+    (0.08, 0.0, 0.0),     # no bump: the 2nd-order overshoot at 0.733 s is the car's own
+    (0.30, 0.015, 1.5),   # narrow, but after half the yaw rise (0.30 > 0.227 s)
+    (0.15, 0.20, 1.5),    # centred early, but wide (FWHM 2.355 x 0.2 = 0.47 s > 0.227 s)
+])
+def test_an_overshoot_of_the_cars_own_response_is_not_a_spike(
+        bump_at_s: float, bump_width_s: float, bump_size: float) -> None:
+    res = _spike_run(bump_at_s, max(bump_width_s, 1e-3), bump_size)
+    ay = res.responses["lateral_accel_mps2"]
+    assert ay.overshoot is not None and ay.overshoot > 0.0
+    assert ay.spike == ""
+    assert ay.to_dict()["overshoot_is_spike"] is False
+
+
 def test_step_without_hold_is_refused() -> None:
     """A pulse (steer back to zero after 0.5 s) gives no steady state: clear message."""
     t = np.arange(0.0, 5.0, 1e-3)

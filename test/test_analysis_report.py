@@ -452,3 +452,51 @@ def test_analyze_draws_a_bode_plot_of_the_swept_sine_scenario(tmp_path: Path) ->
                                    data["maneuver"]["initial_speed_mps"])
     assert met[U.gain_key("yaw_rate_radps", "front_wheel_angle_rad")] == pytest.approx(
         F.dc_gain(model, "yaw_rate_radps"), rel=0.05)
+
+
+# ------------------------------------------------- what the default report says it measured
+
+def test_step_title_says_when_a_run_is_not_the_iso_condition() -> None:
+    """ISO 7401's step test is at a steady 4 m/s²: the title says ISO 7401 only for the
+    scenario made that way (iso7401_step_4mps2: maneuver target 4 m/s²), and for the default
+    scenario (a 1.5 deg step at equal steer, fws 6.3 m/s²) that it is not the ISO condition."""
+    from fourws_run.config import RunConfig
+
+    def maneuver(name: str) -> dict:
+        return RunConfig.from_scenario(load_scenario(name), "fws").to_dict()["maneuver"]
+
+    iso = RT.step_title([maneuver("iso7401_step_4mps2")], [4.0])
+    assert iso == "ISO 7401 step response (steady a_y 4 m/s²)"
+    default = RT.step_title([maneuver("default")], [6.27])
+    assert "not the ISO 7401 condition (steady a_y 4 m/s²)" in default
+    assert "steady a_y 6.3 m/s²" in default and not default.startswith("ISO 7401")
+
+
+def test_default_report_names_the_roll_oversteer_and_the_sol1_spike(engineer: dict) -> None:
+    """The first lines, before any number: table_8_1's understeering tire set is an
+    oversteering car through roll steer, with every level's critical speed as
+    fourws_analysis.critical_speeds gives it (the numbers of fourws handling); the step
+    table's title says it is not the ISO condition; sol1's a_y overshoot of the default step
+    (48 %, peak 0.09 s after the step) is flagged as one spike of the rear-steer command,
+    fws's is not."""
+    from fourws_analysis import critical_speeds as cs
+
+    html_text = engineer["html"]
+    first = html_text[html_text.index("The car and the runs"):html_text.index("How to read")]
+    assert "table_8_1: roll steer makes the understeering tire set an oversteering car" in first
+    car = load_vehicle("table_8_1")
+    for level in ("3dof", "8dof-lin"):
+        crit = cs.critical_speed(level, car).critical_speed_mps
+        assert f"{cs.LEVELS[level]} oversteer, critical speed {crit:.3g} m/s " \
+               f"({crit * 3.6:.0f} km/h)" in first
+    assert "2-DOF understeer, characteristic speed 34.9 m/s" in first
+    assert "not the ISO 7401 condition" in html_text
+    assert "<h3>ISO 7401 step response" not in html_text
+    sol1 = engineer["metrics"]["default-sol1"]["iso7401_step"]["lateral_accel_mps2"]
+    fws = engineer["metrics"]["default-fws"]["iso7401_step"]["lateral_accel_mps2"]
+    assert sol1["overshoot_fraction"] == pytest.approx(0.48, abs=0.02)
+    assert sol1["peak_response_time_s"] == pytest.approx(0.09, abs=0.01)
+    assert sol1["overshoot_is_spike"] is True and "rear-steer command" in sol1["spike"]
+    assert fws["overshoot_is_spike"] is False
+    assert "default-sol1: the lateral-acceleration overshoot (48 %) is one spike" in \
+        first.replace("&#x27;", "'")

@@ -256,7 +256,8 @@ def test_every_number_field_declares_its_bounds():
     plausibility range declared next to it, and every shipped file lies inside."""
     from fourws_sim import drivers, params
 
-    classes = [*params._SUBSYSTEMS.values(), *MANEUVER_TYPES.values(), drivers.SpeedHoldSpec,
+    classes = [*params._SUBSYSTEMS.values(), params.TMeasy, *MANEUVER_TYPES.values(),
+               drivers.SpeedHoldSpec,
                drivers.PathDriverSpec, drivers.TrackingDriverSpec]
     checked = 0
     for cls in classes:

@@ -62,15 +62,15 @@ def _coeffs(name: str) -> np.ndarray:
 
 
 def test_registry_names_and_unknown_name() -> None:
-    assert set(TIRES) == {"linear", "sti", "magic_formula"}
+    assert set(TIRES) == {"linear", "sti", "magic_formula", "tmeasy"}
     with pytest.raises(UnknownNameError) as err:
         get_tire("pacejka89")
     assert isinstance(err.value, ValueError)
-    for name in ("linear", "sti", "magic_formula"):
+    for name in TIRES:
         assert name in str(err.value)
 
 
-@pytest.mark.parametrize("name", ["linear", "sti", "magic_formula"])
+@pytest.mark.parametrize("name", list(TIRES))
 def test_numba_compiles_and_matches_python(name: str) -> None:
     module = get_tire(name)
     coeffs = _coeffs(name)
@@ -83,7 +83,7 @@ def test_numba_compiles_and_matches_python(name: str) -> None:
                 assert_allclose(got, ref, rtol=1e-12, atol=1e-9)
 
 
-@pytest.mark.parametrize("name", ["linear", "sti", "magic_formula"])
+@pytest.mark.parametrize("name", list(TIRES))
 def test_robust_no_nan_and_zero_without_load(name: str) -> None:
     module = get_tire(name)
     coeffs = _coeffs(name)
@@ -97,13 +97,17 @@ def test_robust_no_nan_and_zero_without_load(name: str) -> None:
                     assert all(math.isfinite(v) for v in out), (fz, vx, a, k, out)
 
 
-@pytest.mark.parametrize("name", ["linear", "sti", "magic_formula"])
+@pytest.mark.parametrize("name", list(TIRES))
 def test_cornering_stiffness_matches_analytic(name: str) -> None:
     module = get_tire(name)
     coeffs = _coeffs(name)
+    # TMeasy's characteristic bends at zero slip already (F = dF0 s (1 - p s/s_M + ...) in
+    # |s|, p = dF0 s_M/F_M - 2), so the central difference of step h = 1e-5 is off by about
+    # p h/s_M, 4e-5 at 1500 N; the others are smooth there
+    rtol = 1e-4 if name == "tmeasy" else 1e-5
     for fz in (1500.0, 3769.4, 4448.2, 6000.0):
         assert_allclose(cornering_stiffness(name, coeffs, fz),
-                        module.cornering_stiffness_analytic(coeffs, fz), rtol=1e-5)
+                        module.cornering_stiffness_analytic(coeffs, fz), rtol=rtol)
 
 
 # ---------------------------------------------------------------- linear

@@ -15,8 +15,8 @@ Sign conventions (``docs/architecture.md``): ``Fy = -C_alpha * alpha`` for small
 ``Fx = +C_s * kappa`` for small slip ratio (positive under drive, -1 locked).
 
 The argument ``mu`` is the road friction coefficient. For ``linear`` it is the absolute peak
-friction; ``sti`` and ``magic_formula`` carry their own (load- and speed-dependent) peak friction
-measured on a test surface, and ``mu`` scales it (1.0 = the test surface).
+friction; ``sti``, ``magic_formula`` and ``tmeasy`` carry their own (load- and speed-dependent)
+peak friction measured on a test surface, and ``mu`` scales it (1.0 = the test surface).
 """
 
 from __future__ import annotations
@@ -26,13 +26,14 @@ from types import ModuleType
 import numpy as np
 
 from fourws_sim.errors import UnknownNameError
-from fourws_sim.tires import linear, magic_formula, sti
+from fourws_sim.tires import linear, magic_formula, sti, tmeasy
 
 #: Registry of tire models, name -> module: ``TIRES["sti"].forces(...)``.
 TIRES: dict[str, ModuleType] = {
     "linear": linear,
     "sti": sti,
     "magic_formula": magic_formula,
+    "tmeasy": tmeasy,
 }
 
 #: Step of the central difference used by :func:`cornering_stiffness`, rad.
@@ -47,7 +48,7 @@ def get_tire(name: str) -> ModuleType:
     Raises
     ------
     UnknownNameError
-        If ``name`` is not one of ``linear``, ``magic_formula``, ``sti``.
+        If ``name`` is not a key of :data:`TIRES`.
     """
     try:
         return TIRES[name]
