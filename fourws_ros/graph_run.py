@@ -393,6 +393,11 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
                 echo(line)
     if tty:
         print(file=sys.stderr)
+    dead = group.failed()
+    if dead is not None and dead.exit_code() is not None and dead.exit_code() < 0:
+        # a node was killed: the simulator may have ended the run first (a peer left), but
+        # the kill is the cause
+        return describe_exit(dead)
     return ""
 
 

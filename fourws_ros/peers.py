@@ -90,6 +90,7 @@ class PeerWatch:
         self._since = monotonic()
         self._reported = 0.0
         self._met = False
+        self._present: list[set[str]] = []
         #: Configuration failures of peers announced on ``/fourws/node_config``.
         self.failed_peers: dict[str, str] = {}
         node.create_subscription(topics.message_class(topics.NODE_CONFIG), topics.NODE_CONFIG,
@@ -130,10 +131,18 @@ class PeerWatch:
                            + (", ".join(names) if names else "none") + ")")
         return out
 
+    def _names(self, need: Need) -> set[str]:
+        infos = (self._node.get_subscriptions_info_by_topic(need.topic)
+                 if need.what == "subscribers"
+                 else self._node.get_publishers_info_by_topic(need.topic))
+        return {i.node_name for i in infos} - {self._node.get_name()}
+
     def ready(self) -> bool:
         """Every need is met (once met, it stays so: :meth:`gone` watches after that)."""
         if not self._met:
             self._met = all(n.matched() >= n.count for n in self.needs)
+            if self._met:  # who was there, to name the one that leaves
+                self._present = [self._names(n) for n in self.needs]
         return self._met
 
     def check_startup(self) -> str:
@@ -170,11 +179,13 @@ class PeerWatch:
             return failed
         if not self._met:
             return ""
-        for need in self.needs:
+        for need, present in zip(self.needs, self._present):
             have = need.matched()
             if have < need.count:
-                return (f"{need.count - have} of the {need.count} {need.what} of {need.topic} "
-                        "left the graph (their node exited or was killed)")
+                left = sorted(present - self._names(need))
+                who = f"node {', '.join(left)}" if left else "a node"
+                return (f"{who} ({need.count - have} of the {need.count} {need.what} of "
+                        f"{need.topic}) left the graph: it exited or was killed")
         return ""
 
 

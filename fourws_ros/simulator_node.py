@@ -150,9 +150,9 @@ class SimulatorNode(Node):
         declare("initial_speed_mps", 23.611111111111111, ParameterDescriptor(
             description="forward speed at reset, m/s", floating_point_range=_frange(0.0, 100.0)))
         declare("answer_timeout_s", 60.0, ParameterDescriptor(
-            description="lockstep: wall time to wait for a tick's answers (and for the "
-                        "recorder to catch up) before the run stops as failed (lockstep never "
-                        "substitutes an input), s",
+            description="wall time to wait for a lockstep tick's answers (realtime: for the "
+                        "first state's) before the run stops as failed (no tick runs on an "
+                        "input that was not sent), s",
             floating_point_range=_frange(1e-3, 3600.0)))
         declare("command_stale_periods", 10, ParameterDescriptor(
             description="realtime: a rear-steer command is fresh while the state it answers "
@@ -295,6 +295,7 @@ class SimulatorNode(Node):
                           stale_after_s=lambda: (int(self._cfg["command_stale_periods"])
                                                  * self.control_period_s),
                           driver_timeout_s=lambda: float(self._cfg["driver_timeout_s"]),
+                          answer_timeout_s=lambda: float(self._cfg["answer_timeout_s"]),
                           priority=int(self._param("realtime_priority")),
                           warn=self.get_logger().warning)
 

@@ -20,7 +20,11 @@ the passing of time depends on the clock mode, and is one of these two classes. 
     anything but its answers, so a loaded machine cannot change the numbers: after
     ``answer_timeout_s`` of wall time without them the run stops as failed, naming the node.
 ``realtime`` (paced by the wall clock)
-    A thread integrates one step every ``integration_step_s`` of wall time
+    The first state is published and answered as in lockstep (the wall clock starts once the
+    driver input and the command of state 0 are in, so a node that is slow to start cannot
+    make the run fail or go without rear steer at its beginning; after ``answer_timeout_s``
+    without them the run stops as failed, naming the node). Then a thread integrates one step
+    every ``integration_step_s`` of wall time
     (:class:`~fourws_run.ticks.Pacer`), holds the latest valid driver input and command
     (:class:`~fourws_run.ticks.RealtimeAnswers`) and hands a state to the sink every
     ``state_period_s``. A command is fresh while the state it answers is at most
@@ -313,9 +317,14 @@ class RealtimeClock(Clock):
 
     def __init__(self, engine: TickEngine, sink: TickSink, limits: InputLimits, state_steps: int,
                  stale_after_s: Callable[[], float], driver_timeout_s: Callable[[], float],
-                 priority: int = 0, warn: Callable[[str], None] = print) -> None:
+                 answer_timeout_s: Callable[[], float] = lambda: 60.0, priority: int = 0,
+                 warn: Callable[[str], None] = print) -> None:
         super().__init__(engine, sink)
         self.answers = RealtimeAnswers(limits)
+        self._answer_timeout = answer_timeout_s
+        #: The first state, published and waiting for its answers (None once running).
+        self._first: Tick | None = None
+        self._first_since = 0.0
         self.state_steps = int(state_steps)
         self._stale_after = stale_after_s
         self._driver_timeout = driver_timeout_s
@@ -330,19 +339,44 @@ class RealtimeClock(Clock):
         return self.answers
 
     def start(self) -> None:
-        """Start the integration thread (once)."""
-        if self._thread is not None:
+        """Publish the first state; the thread starts once it is answered (once)."""
+        if self.started:
             return
         self.started = True
+        tick = self.engine.tick
+        with self.lock:
+            self.answers.published(tick)
+        self._first, self._first_since = tick, time.monotonic()
+        if not self.sink.publish_tick(tick):
+            self._first = None
+
+    def _first_answered(self) -> None:
+        """The first state has both answers: the wall clock starts."""
+        if self._first is None or self.paused:
+            return
+        if self.answers.driver_time_s < self._first.t \
+                or self.answers.rear_state_time_s < self._first.t:
+            return
+        self._first = None
+        self._start_thread()
+
+    def _start_thread(self) -> None:
+        if self._thread is not None:
+            return
         self._stop = False
         self._thread = threading.Thread(target=self._thread_main, daemon=True,
                                         name="fourws-realtime")
         self._thread.start()
 
     def resume(self) -> None:
-        """Un-paused: the thread runs again."""
+        """Un-paused: the thread runs again (or the first state goes out)."""
         self.paused = False
-        self.start()
+        if not self.started:
+            self.start()
+        elif self._first is None:
+            self._start_thread()
+        else:
+            self._first_answered()
 
     def stop(self) -> None:
         """Stop and join the integration thread (from any other thread)."""
@@ -362,11 +396,15 @@ class RealtimeClock(Clock):
         """A driver input arrived (held if valid)."""
         with self.lock:
             self.answers.offer_driver(stamp_ns, cmd)
+        if self._first is not None:
+            self._first_answered()
 
     def offer_command(self, step: int, stamp_ns: int, angle_rad: float) -> None:
         """A rear-steer command arrived (held if valid)."""
         with self.lock:
             self.answers.offer_command(step, stamp_ns, angle_rad)
+        if self._first is not None:
+            self._first_answered()
 
     def is_awaited(self, stamp_ns: int) -> bool:
         """Whether ``stamp_ns`` is a published state's (a maneuver's 'done' must answer one)."""
@@ -376,9 +414,26 @@ class RealtimeClock(Clock):
         """Realtime has no flow control (it cannot wait)."""
 
     def housekeeping(self) -> None:
-        """Nothing to do between steps (the thread paces itself)."""
+        """While the first state waits for its answers: stop the run after the answer timeout,
+        naming the node (once running, the thread paces itself)."""
+        first = self._first
+        if first is None or self.paused:
+            return
+        if time.monotonic() - self._first_since > self._answer_timeout():
+            missing = self.waiting_for()
+            node = self.sink.silent_node(DRIVER_INPUT if DRIVER_INPUT in missing
+                                         else REAR_STEER_COMMAND)
+            self.sink.end(f"no {missing.split(' (')[0]} for the first state within "
+                          f"{self._answer_timeout():g} s (wall time); {node} did not answer",
+                          True)
 
     def waiting_for(self) -> str:
+        if self._first is not None:
+            if self.answers.driver_time_s < self._first.t:
+                return f"{DRIVER_INPUT} (maneuver node)"
+            if self.answers.rear_state_time_s < self._first.t:
+                return f"{REAR_STEER_COMMAND} (controller node)"
+            return ""
         age = self.engine.sim.time_s - self.answers.driver_time_s
         return f"{DRIVER_INPUT} (maneuver node)" if age > self._driver_timeout() else ""
 

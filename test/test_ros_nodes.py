@@ -539,7 +539,13 @@ def test_realtime_command_timeout_falls_back_to_zero_and_recovers(rclpy_context)
     executor.add_node(sim)
     executor.add_node(peer.node)
     try:
-        # no controller: after the timeout the simulator reports zero rear steer
+        # the wall clock starts once the first state is answered (driver input and command)
+        assert _spin_until(executor, lambda: len(peer.states) == 1, 20.0)
+        time.sleep(0.2)
+        executor.spin_once(timeout_sec=0.05)
+        assert len(peer.states) == 1  # nothing runs before the first answers
+        peer.answer(peer.states[0], 0.0)
+        # then no controller: after the timeout the simulator reports zero rear steer
         assert _spin_until(executor, lambda: any(s.command_timed_out for s in peer.status),
                            5.0)
         flagged = next(s for s in peer.status if s.command_timed_out)
