@@ -268,6 +268,12 @@ class LockstepClock(Clock):
         if not self._reported_wait and self._now() - since > LONG_WAIT_S:
             self._reported_wait = True
             self.sink.report_wait(tick.t)
+        if self.held is not None and self._now() - self._held_since > self._timeout():
+            self.sink.end(f"the recorder did not catch up within {self._timeout():g} s (wall "
+                          f"time) at t = {self.held.t:.2f} s: it is behind on "
+                          f"{self.holding_back()} by more than the flow-control window "
+                          "(stopped or starved?)", True)
+            return
         awaited = self.answers.awaited
         if awaited is not None and self._now() - self._await_since > self._timeout():
             missing = self.answers.waiting_for
