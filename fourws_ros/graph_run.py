@@ -337,6 +337,7 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
         return "the simulator did not answer the start request"
     echo(f"  graph up after {time.monotonic() - group.started_at:.1f} s; running "
          f"{config.maneuver.name} ({config.maneuver.duration_s} s simulated)")
+    echo(f"  start-up (s from launch): {group.startup_breakdown()}")
     state.last_advance = state.t_start = time.monotonic()
     reported = -1
     called = False

@@ -19,7 +19,7 @@ import signal
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -104,6 +104,8 @@ class Child:
     proc: subprocess.Popen[bytes] | None = None
     phase: str = ""
     phase_at: float = 0.0
+    #: Every phase reported, with its time (monotonic s).
+    phase_log: list[tuple[str, float]] = field(default_factory=list)
     _phase_fd: int = -1
     _phase_buf: bytes = b""
 
@@ -128,6 +130,7 @@ class Child:
             if line.strip():
                 self.phase = line.decode("utf-8", "replace").strip()
                 self.phase_at = time.monotonic()
+                self.phase_log.append((self.phase, self.phase_at))
 
     def alive(self) -> bool:
         """True while the process runs."""
@@ -249,6 +252,20 @@ class ProcessGroup:
         """Take every child's new start-up phase lines."""
         for child in self.children:
             child.read_phases()
+
+    def startup_breakdown(self) -> str:
+        """Where the start-up time went, per node that reports phases: seconds from its
+        launch to its first phase (Python imports), and in each phase."""
+        parts = []
+        for child in self.children:
+            if not child.phase_log:
+                continue
+            t, doing, spans = self.started_at, "imports", []
+            for phase, at in child.phase_log:
+                spans.append(f"{doing} {at - t:.1f}")
+                doing, t = phase, at
+            parts.append(f"{child.name}: " + ", ".join(spans))
+        return "; ".join(parts)
 
     def child(self, name: str) -> Child:
         """The child process called ``name``."""
