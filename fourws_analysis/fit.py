@@ -17,10 +17,10 @@ over the channels :math:`c` the log and the model share (:data:`FIT_CHANNELS`), 
 :func:`scipy.optimize.least_squares` inside the fields' plausibility bounds. Subtracting each
 channel's mean residual :math:`\bar e_c` fits a constant sensor bias per channel and log in
 closed form (the biases are reported); :math:`\sigma_c` is the channel's residual standard
-deviation after a first pass (never below its instrument floor,
-:attr:`fourws_analysis.measured.Column.noise_floor`), inflated by
-:math:`(1+\rho_1)/(1-\rho_1)` where the residual is correlated from sample to sample
-(lag-1 autocorrelation :math:`\rho_1`, an AR(1) view of model error).
+deviation after a first pass, its variance inflated by :math:`(1+\rho_1)/(1-\rho_1)` where
+the residual is correlated from sample to sample (lag-1 autocorrelation :math:`\rho_1`, an
+AR(1) view of model error), and never below the channel's instrument floor
+(:attr:`fourws_analysis.measured.Column.noise_floor`).
 
 Uncertainty. With :math:`W` the weighted residual Jacobian at the optimum (central
 differences), the covariance of the fitted values is :math:`(W^T W)^{-1}`; each value is
@@ -58,7 +58,7 @@ import scipy.signal
 
 from fourws_analysis import frequency as fq
 from fourws_analysis.linear import RUN_CHANNELS, _standard_outputs
-from fourws_analysis.measured import COLUMN_BY_NAME, MeasuredLog
+from fourws_analysis.measured import COLUMN_BY_NAME, MIN_SAMPLES, MeasuredLog
 from fourws_sim.drivers import SpeedHoldDriver, SpeedHoldSpec
 from fourws_sim.errors import DivergedError, FourwsError, ParameterError
 from fourws_sim.maneuvers.esc import phaseless_lowpass
@@ -281,16 +281,15 @@ class Level:
 
 
 def _ratio(vehicle: Vehicle) -> float:
-    return vehicle.steering.ratio if vehicle.steering is not None else math.nan
+    """Steering ratio N; 1 for a vehicle without a steering subsystem, as its maneuvers take
+    it (:class:`fourws_sim.maneuvers.base.Maneuver`: the hand wheel is the road wheel)."""
+    return vehicle.steering.ratio if vehicle.steering is not None else 1.0
 
 
 def steer_inputs(log: MeasuredLog, vehicle: Vehicle) -> tuple[np.ndarray, np.ndarray]:
     """Front road-wheel command δH/N (rad) and the rear road-wheel angle (rad, 0 without one)
     of a log, per sample, held over the sample's step."""
-    if vehicle.steering is None:
-        raise ParameterError("steering", "missing; the steering-wheel angle needs the steering "
-                             "ratio", vehicle.source or vehicle.name)
-    front = log.channels["steering_wheel_angle_rad"] / vehicle.steering.ratio
+    front = log.channels["steering_wheel_angle_rad"] / _ratio(vehicle)
     rear = log.channels.get("rear_wheel_angle_rad")
     return front, (np.zeros_like(front) if rear is None else rear)
 
@@ -643,6 +642,8 @@ class FitResult:
         Model runs of the fit.
     elapsed_s : float
         Wall time of the identification, s.
+    bias : bool
+        A constant offset per channel and log was fitted.
     notes : list of str
     """
 
@@ -662,6 +663,7 @@ class FitResult:
     model: list[dict[str, np.ndarray]]
     evaluations: int
     elapsed_s: float
+    bias: bool = True
     notes: list[str] = field(default_factory=list)
 
     def value(self, path: str) -> FittedValue:
@@ -687,6 +689,7 @@ class FitResult:
                                      for a, b, r in self.indistinguishable],
             "channels": [c.to_dict() for c in self.channels],
             "frequency_response": [f.to_dict() for f in self.frequency],
+            "biases_fitted": self.bias,
             "evaluations": self.evaluations, "elapsed_s": self.elapsed_s,
             "notes": list(self.notes)})
 
@@ -723,6 +726,7 @@ class _Problem:
     groups: list[FieldGroup]
     channels: list[list[str]]  # per log
     sigma: list[dict[str, float]]  # per log, per channel
+    bias: bool = True
     evaluations: int = 0
 
     def predict(self, theta: np.ndarray) -> list[dict[str, np.ndarray]]:
@@ -731,11 +735,12 @@ class _Problem:
         return [self.level.simulate(g, vehicle) for g in self.logs]
 
     def errors(self, pred: list[dict[str, np.ndarray]]) -> list[dict[str, np.ndarray]]:
-        """Residuals per log and channel, each less its mean (the bias)."""
+        """Residuals per log and channel, each less its mean (the bias) when biases are
+        fitted."""
         out = []
         for g, p, chans in zip(self.logs, pred, self.channels):
-            out.append({c: (g.channels[c] - p[c]) - float(np.mean(g.channels[c] - p[c]))
-                        for c in chans})
+            out.append({c: (g.channels[c] - p[c]) - (float(np.mean(g.channels[c] - p[c]))
+                                                      if self.bias else 0.0) for c in chans})
         return out
 
     def weighted(self, theta: np.ndarray) -> np.ndarray:
@@ -770,29 +775,25 @@ def _floor(channel: str) -> float:
 
 def _covariance(jac: np.ndarray) -> np.ndarray:
     """(J^T J)^-1, inf on the diagonal of directions the data cannot see."""
-    u, s, vt = np.linalg.svd(jac, full_matrices=False)
-    tol = s[0] * 1e-12 if s.size and s[0] > 0 else 0.0
-    inv = np.where(s > tol, 1.0 / np.maximum(s, 1e-300) ** 2, np.inf)
-    if np.all(np.isfinite(inv)):
-        return (vt.T * inv) @ vt
-    cov = np.full((jac.shape[1], jac.shape[1]), np.inf)
-    return cov
+    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    tol = s[0] * 1e-12 if s.size and s[0] > 0 else math.inf
+    if s.size < jac.shape[1] or np.any(s <= tol):
+        return np.full((jac.shape[1], jac.shape[1]), np.inf)
+    return (vt.T / s ** 2) @ vt
 
 
 def _check_steering_units(log: MeasuredLog, vehicle: Vehicle) -> None:
     """δH/N against the kinematic steer L r/U in the linear range (:data:`STEER_YAW_RATIO`):
     a factor of 57 means degrees given as radians."""
-    if vehicle.steering is None:
-        return
     u = log.channels["speed_mps"]
     sel = (np.abs(log.channels["lateral_accel_mps2"]) <= LINEAR_RANGE_MPS2) & (u > 2.0)
-    if np.count_nonzero(sel) < 50:
+    if np.count_nonzero(sel) < MIN_SAMPLES:
         return
-    front = log.channels["steering_wheel_angle_rad"][sel] / vehicle.steering.ratio
+    front = log.channels["steering_wheel_angle_rad"][sel] / _ratio(vehicle)
     kin = vehicle.chassis.wheelbase_m * log.channels["yaw_rate_radps"][sel] / u[sel]
     s_k, s_f = float(np.std(kin)), float(np.std(front))
-    if s_k < 50.0 * COLUMN_BY_NAME["steering_wheel_angle_rad"].noise_floor \
-            / vehicle.steering.ratio:
+    # a turn of less than 5 hand-wheel resolutions is too little steering to judge
+    if s_k < 5.0 * COLUMN_BY_NAME["steering_wheel_angle_rad"].noise_floor / _ratio(vehicle):
         return
     ratio = s_f / s_k
     low, high = STEER_YAW_RATIO
@@ -800,7 +801,7 @@ def _check_steering_units(log: MeasuredLog, vehicle: Vehicle) -> None:
         raise ParameterError("steering_wheel_angle_rad", f"over the steering ratio varies "
                              f"{ratio:.3g} times as much as the kinematic steer L r/U "
                              f"(a car: {low:g}-{high:g}); is the angle in degrees, or the "
-                             f"ratio ({vehicle.steering.ratio:g}) not the car's?", log.source)
+                             f"ratio ({_ratio(vehicle):g}) not the car's?", log.source)
 
 
 def _predicted_ci(problem: _Problem, theta0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -830,9 +831,14 @@ def _excitation(problem: _Problem, theta0: np.ndarray, requested: bool,
     others, naming them."""
     groups = problem.groups
     source = ", ".join(g.source for g in problem.logs)
+    def roll_signal(log: MeasuredLog) -> float:
+        roll = log.channels["roll_rad"]
+        # with a fitted bias only the roll's changes tell; without, its level too
+        return float(np.std(roll) if problem.bias else np.sqrt(np.mean(roll ** 2)))
+
     no_roll = [g for g in groups if g.roll and not all(
-        log.has("roll_rad") and float(np.std(log.channels["roll_rad"]))
-        >= MIN_ROLL_SIGNAL_FLOORS * _floor("roll_rad") for log in problem.logs)]
+        log.has("roll_rad") and roll_signal(log) >= MIN_ROLL_SIGNAL_FLOORS * _floor("roll_rad")
+        for log in problem.logs)]
     problems: dict[str, str] = {g.spec: "no roll signal in the log (roll_rad missing or "
                                 "flat); roll fields need one" for g in no_roll}
     rel, corr = _predicted_ci(problem, theta0)
@@ -855,7 +861,7 @@ def _excitation(problem: _Problem, theta0: np.ndarray, requested: bool,
             row[j] = 0.0
             if row.size > 1 and row.max() > INDISTINGUISHABLE:
                 partner = f", cannot be told apart from {groups[int(np.argmax(row))].spec}"
-            what = ("not pinned at all" if not math.isfinite(rel[j])
+            what = ("not pinned at all" if not rel[j] <= 10.0
                     else f"pinned only to +-{100 * rel[j]:.0f} %")
             problems[g.spec] = f"{what} (95 %, instrument-level noise){partner}"
     if not problems:
@@ -873,7 +879,7 @@ def _excitation(problem: _Problem, theta0: np.ndarray, requested: bool,
 
 def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
              fields: Sequence[str] | None = None, tire: str | None = None,
-             name: str | None = None,
+             name: str | None = None, bias: bool = True,
              progress: Callable[[str], None] | None = None) -> FitResult:
     """Fit ``fields`` of ``base`` to ``logs`` on model ``level`` (module docstring).
 
@@ -892,6 +898,10 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
         Tire model of the 8-DOF level.
     name : str, optional
         Name of the fitted vehicle (default ``<base>_fitted``).
+    bias : bool
+        Fit a constant offset per channel and log (default). False: the sensors are taken as
+        zeroed, so a steady record's levels carry information (a steady-state circular run
+        pins the cornering stiffnesses only this way).
     progress : callable, optional
         Called with a short description of each stage.
 
@@ -928,7 +938,7 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
     notes: list[str] = []
     floors = [{c: _floor(c) for c in cs} for cs in chans]
     tick("excitation check")
-    problem = _Problem(lvl, logs, base, groups, chans, floors)
+    problem = _Problem(lvl, logs, base, groups, chans, floors, bias)
     theta0 = np.zeros(len(groups))
     groups = _excitation(problem, theta0, requested, notes)
     if not groups:
@@ -973,12 +983,12 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
         shown = {}
         for c in cs:
             e = g.channels[c] - p[c]
-            bias = float(np.mean(e))
-            shown[c] = p[c] + bias
+            offset = float(np.mean(e)) if bias else 0.0
+            shown[c] = p[c] + offset
             channels.append(ChannelFit(g.name, c, COLUMN_BY_NAME[c].unit,
-                                       float(np.sqrt(np.mean((e - bias) ** 2))),
-                                       float(np.std(g.channels[c])), bias, sig[c],
-                                       _lag1(e - bias)))
+                                       float(np.sqrt(np.mean((e - offset) ** 2))),
+                                       float(np.std(g.channels[c])), offset, sig[c],
+                                       _lag1(e - offset)))
         model.append(shown)
     tick("frequency response")
     frequency = [fr for g, p, cs in zip(logs, model, chans) for fr in _frequency_fit(g, p, cs)]
@@ -991,7 +1001,7 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
                      correlation=corr, indistinguishable=pairs, channels=channels,
                      frequency=frequency, logs=logs, model=model,
                      evaluations=problem.evaluations,
-                     elapsed_s=time.perf_counter() - start, notes=notes)
+                     elapsed_s=time.perf_counter() - start, bias=bias, notes=notes)
 
 
 def _has_fields(vehicle: Vehicle, spec: str) -> bool:
@@ -1014,11 +1024,12 @@ def _lag1(e: np.ndarray) -> float:
 
 
 def _sigma(e: np.ndarray, floor: float) -> float:
-    """Weight of a channel: its residual's standard deviation (at least ``floor``), inflated
-    by (1 + rho1) / (1 - rho1) for a residual correlated from sample to sample (at most 100)."""
+    """Weight of a channel: its residual's standard deviation, its variance inflated by
+    (1 + rho1) / (1 - rho1) for a residual correlated from sample to sample (at most 100),
+    and at least ``floor`` (white instrument noise)."""
     rho = min(max(_lag1(e), 0.0), 0.98)
     inflation = min((1.0 + rho) / (1.0 - rho), 100.0)
-    return max(float(np.std(e)), floor) * math.sqrt(inflation)
+    return max(float(np.std(e)) * math.sqrt(inflation), floor)
 
 
 def _frequency_fit(log: MeasuredLog, model: Mapping[str, np.ndarray],

@@ -134,8 +134,11 @@ KINEMATIC_RANGE_MPS2 = 5.0
 _KINEMATIC_FILTER_HZ = 1.0
 #: ... judged only with this much lateral motion (standard deviation of U r, m/s^2) ...
 KINEMATIC_MIN_MPS2 = 0.3
-#: ... must have std(a_y) / std(U r) within this range (a factor 3.6, 9.8 or 57 is a unit).
+#: ... must have std(a_y) / std(U r) within this range (a factor 3.6, 9.8 or 57 is a unit) ...
 KINEMATIC_RATIO = (0.6, 1.6)
+#: ... over the samples where both are in range, when they are at least this share of those
+#: where a_y is (else over the latter: U r is out of range where a_y is not).
+KINEMATIC_MIN_SHARE = 0.2
 #: Below this |a_y| (m/s^2, the linear range) no car has more sideslip or roll than this
 #: (rad, 11 deg): larger values are in degrees.
 LINEAR_RANGE_MPS2 = 4.0
@@ -226,9 +229,9 @@ def load_log(path: str | Path, dt_s: float | None = None) -> MeasuredLog:
     """
     p = Path(path)
     if p.suffix.lower() in (".csv", ".parquet"):
-        time_s, columns, notes = (_read_csv(p) if p.suffix.lower() == ".csv"
-                                  else _read_parquet(p))
-        log = _from_columns(p.stem, str(p), time_s, columns, notes, dt_s)
+        time_s, columns, notes, line_of = (_read_csv(p) if p.suffix.lower() == ".csv"
+                                           else _read_parquet(p))
+        log = _from_columns(p.stem, str(p), time_s, columns, notes, line_of, dt_s)
     elif p.is_dir() or p.suffix == ".mcap":
         log = log_from_run(load_bag(p), dt_s)
     elif not p.exists():
@@ -300,15 +303,18 @@ def _column_map(names: Sequence[str],
     return found, notes
 
 
-def _read_csv(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+def _read_csv(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[str], np.ndarray]:
+    """Time, channels (SI), notes and the file line of each sample."""
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise ParameterError("data", "not a UTF-8 text file", str(path)) from None
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
+    numbered = [(k + 1, ln) for k, ln in enumerate(text.splitlines())
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    if not numbered:
         raise ParameterError("data", "empty CSV file (no header row)", str(path))
-    rows = list(csv.reader(lines))
+    line_of = np.array([k for k, _ in numbered[1:]], dtype=int)
+    rows = list(csv.reader([ln for _, ln in numbered]))
     header = [h.strip() for h in rows[0]]
     found, notes = _column_map(header, str(path))
     wanted = {TIME_COLUMN: (TIME_COLUMN, 1.0), **found}
@@ -323,14 +329,15 @@ def _read_csv(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]
                 arr[i] = float(row[k])
             except (ValueError, IndexError):
                 cell = row[k] if k < len(row) else "<missing>"
-                raise ParameterError(name, f"row {i + 2}: {cell!r} is not a number",
+                raise ParameterError(name, f"line {line_of[i]}: {cell!r} is not a number",
                                      str(path)) from None
         values[channel] = arr * factor if factor != 1.0 else arr
     time_s = values.pop(TIME_COLUMN)
-    return time_s, values, notes
+    return time_s, values, notes, line_of
 
 
-def _read_parquet(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+def _read_parquet(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[str], None]:
+    """Time, channels (SI), notes (and no file lines: samples are numbered)."""
     # pyarrow: a pip-only dependency (no rosdep key); only Parquet logs need it
     import pyarrow.parquet as pq
 
@@ -348,17 +355,22 @@ def _read_parquet(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[s
             raise ParameterError(name, "is not a numeric column", str(path)) from None
         values[channel] = arr * factor
     time_s = values.pop(TIME_COLUMN)
-    return time_s, values, notes
+    return time_s, values, notes, None
 
 
 def _from_columns(name: str, source: str, time_s: np.ndarray, columns: dict[str, np.ndarray],
-                  notes: list[str], dt_s: float | None) -> MeasuredLog:
-    """Check the time column and put the channels on a uniform grid."""
+                  notes: list[str], line_of: np.ndarray | None,
+                  dt_s: float | None) -> MeasuredLog:
+    """Check the time column and put the channels on a uniform grid; ``line_of``: the file
+    line of each sample (CSV), named in errors."""
+    def where(i: int) -> str:
+        return f"line {line_of[i]}" if line_of is not None else f"sample {i + 1}"
+
     for channel, arr in {TIME_COLUMN: time_s, **columns}.items():
         bad = np.flatnonzero(~np.isfinite(arr))
         if bad.size:
-            raise ParameterError(channel, f"row {int(bad[0]) + 2}: {arr[bad[0]]!r} is not a "
-                                 "finite number", source)
+            raise ParameterError(channel, f"{where(int(bad[0]))}: {float(arr[bad[0]])!r} is "
+                                 "not a finite number", source)
     if time_s.size < MIN_SAMPLES:
         raise ParameterError(TIME_COLUMN, f"{time_s.size} samples; a log needs at least "
                              f"{MIN_SAMPLES}", source)
@@ -366,13 +378,14 @@ def _from_columns(name: str, source: str, time_s: np.ndarray, columns: dict[str,
     back = np.flatnonzero(step <= 0.0)
     if back.size:
         i = int(back[0])
-        raise ParameterError(TIME_COLUMN, f"time does not increase at row {i + 3} "
-                             f"({time_s[i + 1]!r} s after {time_s[i]!r} s)", source)
+        raise ParameterError(TIME_COLUMN, f"time does not increase at {where(i + 1)} "
+                             f"({float(time_s[i + 1])!r} s after {float(time_s[i])!r} s)",
+                             source)
     median = float(np.median(step))
     gap = np.flatnonzero(step > MAX_GAP_STEPS * median)
     if gap.size:
         i = int(gap[0])
-        raise ParameterError(TIME_COLUMN, f"a gap of {step[i]:.4g} s at row {i + 3} (t = "
+        raise ParameterError(TIME_COLUMN, f"a gap of {step[i]:.4g} s at {where(i + 1)} (t = "
                              f"{time_s[i]:.6g} s; the median step is {median:.4g} s)", source)
     grid_dt = median if dt_s is None else float(dt_s)
     if not (math.isfinite(grid_dt) and median / 100.0 <= grid_dt
@@ -435,14 +448,19 @@ def check_log(log: MeasuredLog) -> None:
 
 
 def _check_kinematics(log: MeasuredLog) -> None:
-    """a_y against U r (module docstring): skipped when the log has too little lateral
-    motion in the range where the two agree."""
+    """a_y against U r (module docstring), over the samples where both are in the linear range
+    (a car sliding at its limit has U r well above a_y; the record before it does not);
+    skipped when the log has too little lateral motion there. A log whose U r leaves the
+    linear range at most of the samples where a_y stays in it is refused as well: a unit."""
     ay = phaseless_lowpass(log.channels["lateral_accel_mps2"], log.dt_s, _KINEMATIC_FILTER_HZ)
     ur = phaseless_lowpass(log.channels["speed_mps"] * log.channels["yaw_rate_radps"], log.dt_s,
                            _KINEMATIC_FILTER_HZ)
-    sel = (np.abs(ay) <= KINEMATIC_RANGE_MPS2) & (np.abs(ur) <= KINEMATIC_RANGE_MPS2)
-    if np.count_nonzero(sel) < MIN_SAMPLES:
+    linear = np.abs(ay) <= KINEMATIC_RANGE_MPS2
+    if np.count_nonzero(linear) < MIN_SAMPLES:
         return
+    both = linear & (np.abs(ur) <= KINEMATIC_RANGE_MPS2)
+    sel = both if np.count_nonzero(both) >= KINEMATIC_MIN_SHARE * np.count_nonzero(linear) \
+        else linear
     s_ur, s_ay = float(np.std(ur[sel])), float(np.std(ay[sel]))
     if s_ur < KINEMATIC_MIN_MPS2 and s_ay < KINEMATIC_MIN_MPS2:
         return

@@ -36,8 +36,9 @@ def reading_notes(result: FitResult) -> list[str]:
         "8-DOF the recorded speed, which its speed-hold driver follows) and the fitted values "
         "minimise the weighted squared difference of every channel the log and the model "
         "share (scipy.optimize.least_squares, inside each field's plausibility bounds).",
-        "A constant offset per channel and log (a sensor bias) is fitted with the values; the "
-        "channel tables give it.",
+        ("A constant offset per channel and log (a sensor bias) is fitted with the values; "
+         "the channel table gives it." if result.bias else
+         "No sensor offsets fitted (--no-bias): the sensors are taken as zeroed."),
         "95 % interval: ±1.96 standard deviations from the Jacobian at the optimum and each "
         "channel's residual noise (never less than its instrument floor; widened where the "
         "residual is correlated from sample to sample, a sign of model error).",

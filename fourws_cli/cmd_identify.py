@@ -45,6 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", metavar="VEHICLE.yaml", help="write the fitted vehicle file")
     parser.add_argument("--name", default=None,
                         help="name of the fitted vehicle (default <base>_fitted)")
+    parser.add_argument("--no-bias", action="store_true",
+                        help="take the sensors as zeroed: no offset per channel is fitted "
+                             "(a steady-state record needs it)")
     parser.add_argument("--report", metavar="DIR",
                         help="write DIR/index.html, PNG plots and DIR/identification.json")
     parser.add_argument("--dt", type=float, default=None, metavar="S",
@@ -71,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"fourws identify: {message}", file=sys.stderr)
 
     result = identify(logs, base, level=args.level, fields=args.fit, tire=args.tire,
-                      name=args.name, progress=progress)
+                      name=args.name, bias=not args.no_bias, progress=progress)
     if out is not None:
         out.write_text(vehicle_yaml(result), encoding="utf-8")
     index = write_identify_report(result, args.report, out) if args.report else None
