@@ -158,3 +158,21 @@ def test_missing_topic_named(tmp_path: Path) -> None:
         run.require(B.TOPIC_DRIVER)
     with pytest.raises(B.BagError, match="no field 'banana'"):
         run.require(B.TOPIC_STATE, "banana")
+
+
+def test_resample_holds_each_command_at_its_own_stamp_on_a_long_record(tmp_path: Path) -> None:
+    """A 60 s record at 100 Hz: the driver command resampled at grid point k is the one
+    stamped k * 10 ms, to the end. (The grid t0 + k dt drifts from the float stamps by about
+    1e-12 s after 47 s; a fixed tolerance of 1e-12 s handed over the previous command from
+    there on, a one-sample delay of the input in the second half of a 60 s sweep.)"""
+    n, dt = 6001, 0.01
+    t = dt * np.arange(n)
+    command = np.arange(n, dtype=float)  # the command is its own sample number
+    state = {"yaw_rate_radps": np.zeros(n), "speed_mps": np.full(n, 20.0)}
+    driver = {"steering_wheel_angle_rad": command, "front_wheel_angle_rad": command}
+    B.write_run(tmp_path / "long", t, state, {"maneuver": {"type": "random_steer"}},
+                driver=driver, model="2dof")
+    run = B.resample(B.load_bag(tmp_path / "long"))
+    assert run.time_s.size == n
+    np.testing.assert_array_equal(run.channels["steering_wheel_angle_rad"], command)
+    np.testing.assert_array_equal(run.channels["front_wheel_angle_cmd_rad"], command)
