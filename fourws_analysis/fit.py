@@ -739,8 +739,9 @@ class _Problem:
         fitted."""
         out = []
         for g, p, chans in zip(self.logs, pred, self.channels):
-            out.append({c: (g.channels[c] - p[c]) - (float(np.mean(g.channels[c] - p[c]))
-                                                      if self.bias else 0.0) for c in chans})
+            errs = {c: g.channels[c] - p[c] for c in chans}
+            out.append({c: e - float(np.mean(e)) for c, e in errs.items()} if self.bias
+                       else errs)
         return out
 
     def weighted(self, theta: np.ndarray) -> np.ndarray:
@@ -831,6 +832,7 @@ def _excitation(problem: _Problem, theta0: np.ndarray, requested: bool,
     others, naming them."""
     groups = problem.groups
     source = ", ".join(g.source for g in problem.logs)
+
     def roll_signal(log: MeasuredLog) -> float:
         roll = log.channels["roll_rad"]
         # with a fitted bias only the roll's changes tell; without, its level too

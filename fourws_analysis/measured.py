@@ -34,7 +34,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from fourws_analysis.bag import RunData, load_bag, resample
+from fourws_analysis.bag import RunData, hold_sorted, load_bag, resample
 from fourws_run.bagfile import BagError
 from fourws_run.interface import REAR_STEER_CMD, WHEELS
 from fourws_sim.errors import ParameterError
@@ -255,7 +255,7 @@ def log_from_run(run: RunData, dt_s: float | None = None) -> MeasuredLog:
     cmd = run.topics.get(REAR_STEER_CMD)
     if cmd is not None and len(cmd) >= 1 and "angle_rad" in cmd.fields:
         channels["rear_wheel_angle_rad"] = hold(cmd.time_s, cmd.fields["angle_rad"],
-                                                uniform.time_s)
+                                                uniform.time_s, uniform.dt_s)
     else:
         notes.append(f"the bag has no {REAR_STEER_CMD}: no rear-steer column")
     return MeasuredLog(name=uniform.name, source=run.path, time_s=uniform.time_s,
@@ -263,13 +263,13 @@ def log_from_run(run: RunData, dt_s: float | None = None) -> MeasuredLog:
                        notes=notes)
 
 
-def hold(time_s: np.ndarray, values: np.ndarray, grid: np.ndarray) -> np.ndarray:
-    """Zero-order hold of ``values`` stamped ``time_s`` on ``grid`` (a command holds until the
-    next one; before the first, the first)."""
+def hold(time_s: np.ndarray, values: np.ndarray, grid: np.ndarray,
+         step_s: float) -> np.ndarray:
+    """Zero-order hold of ``values`` stamped ``time_s`` (any order) on ``grid`` of step
+    ``step_s`` (:func:`fourws_analysis.bag.hold_sorted`)."""
     order = np.argsort(time_s, kind="stable")
-    t, v = np.asarray(time_s, float)[order], np.asarray(values, float)[order]
-    idx = np.clip(np.searchsorted(t, grid + 1e-12, side="right") - 1, 0, t.size - 1)
-    return v[idx]
+    return hold_sorted(np.asarray(time_s, float)[order], np.asarray(values, float)[order],
+                       grid, step_s)
 
 
 def _column_map(names: Sequence[str],
@@ -544,11 +544,13 @@ def topic_columns(run: RunData, topics: Sequence[str], grid: np.ndarray) -> dict
         for key, arr in arrays.fields.items():
             if key.startswith("header.") or arr.dtype.kind not in "fiu":
                 continue
+            step = float(grid[1] - grid[0]) if grid.size > 1 else 1.0
             if arr.ndim == 1:
-                out[f"{short}.{key}"] = hold(arrays.time_s, arr, grid)
+                out[f"{short}.{key}"] = hold(arrays.time_s, arr, grid, step)
             elif arr.ndim == 2 and arr.shape[1] == 4:
                 for j, wheel in enumerate(WHEELS):
-                    out[f"{short}.{key}_{wheel.lower()}"] = hold(arrays.time_s, arr[:, j], grid)
+                    out[f"{short}.{key}_{wheel.lower()}"] = hold(arrays.time_s, arr[:, j], grid,
+                                                                 step)
     return out
 
 

@@ -26,6 +26,7 @@ from fourws_analysis.measured import COLUMN_BY_NAME
 from fourws_analysis.report import REPORT_CSS, _fmt, _list_html
 from fourws_analysis.report_figures import _frequency_ticks, _plt, _save
 
+
 def reading_notes(result: FitResult) -> list[str]:
     """What a reader must know to read the numbers."""
     level = f"Model level: {result.level} ({result.level_reason})."
