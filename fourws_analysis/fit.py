@@ -775,12 +775,20 @@ def _floor(channel: str) -> float:
 
 
 def _covariance(jac: np.ndarray) -> np.ndarray:
-    """(J^T J)^-1, inf on the diagonal of directions the data cannot see."""
+    """(J^T J)^-1 from the singular values of J; a direction the data cannot see (a singular
+    value below 1e-12 of the largest) makes the entries of the parameters it moves infinite,
+    the others keep their values."""
     _, s, vt = np.linalg.svd(jac, full_matrices=False)
-    tol = s[0] * 1e-12 if s.size and s[0] > 0 else math.inf
-    if s.size < jac.shape[1] or np.any(s <= tol):
-        return np.full((jac.shape[1], jac.shape[1]), np.inf)
-    return (vt.T / s ** 2) @ vt
+    n = jac.shape[1]
+    big = s[0] if s.size else 0.0
+    seen = s > big * 1e-12 if big > 0.0 else np.zeros(s.size, dtype=bool)
+    cov = (vt[seen].T / s[seen] ** 2) @ vt[seen]
+    blind = [vt[k] for k in range(s.size) if not seen[k]] + (
+        [] if s.size == n else list(np.linalg.svd(jac)[2][s.size:]))
+    for v in blind:
+        moved = np.abs(v) > 1e-8
+        cov[np.ix_(moved, moved)] = np.inf
+    return cov
 
 
 def _check_steering_units(log: MeasuredLog, vehicle: Vehicle) -> None:
@@ -812,9 +820,15 @@ def _predicted_ci(problem: _Problem, theta0: np.ndarray) -> tuple[np.ndarray, np
     cov = _covariance(jac)
     sd = np.sqrt(np.abs(np.diag(cov)))
     rel = np.array([Z95 * sd[j] * _unit_value(g) for j, g in enumerate(problem.groups)])
+    return rel, _correlation(cov, sd)
+
+
+def _correlation(cov: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """Correlation matrix of ``cov`` (NaN where a variance is infinite or 0)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(sd, sd)
-    return rel, corr
+    corr[~np.isfinite(corr)] = np.nan
+    return corr
 
 
 def _unit_value(group: FieldGroup) -> float:
@@ -826,43 +840,59 @@ def _unit_value(group: FieldGroup) -> float:
     return group.step / v0 if v0 > 0 else 1.0
 
 
-def _excitation(problem: _Problem, theta0: np.ndarray, requested: bool,
-                notes: list[str]) -> list[FieldGroup]:
+def _enters(problem: _Problem, j: int) -> bool:
+    """Group ``j`` moves a number the level's model reads, for some log."""
+    probe = np.zeros(len(problem.groups))
+    probe[j] = 0.01
+    moved = vehicle_with(problem.base, problem.groups, probe)
+    return not all(np.array_equal(problem.level.signature(log, moved),
+                                  problem.level.signature(log, problem.base))
+                   for log in problem.logs)
+
+
+def _excitation(problem: _Problem, requested: bool, notes: list[str]) -> list[FieldGroup]:
     """The groups the record can pin; refuse (requested) or drop with a note (defaults) the
-    others, naming them."""
+    others, naming them: first roll fields without a roll signal and fields the model does
+    not read, then, among the others, those the record would not pin."""
     groups = problem.groups
-    source = ", ".join(g.source for g in problem.logs)
+    source = ", ".join(log.source for log in problem.logs)
 
     def roll_signal(log: MeasuredLog) -> float:
         roll = log.channels["roll_rad"]
         # with a fitted bias only the roll's changes tell; without, its level too
         return float(np.std(roll) if problem.bias else np.sqrt(np.mean(roll ** 2)))
 
-    no_roll = [g for g in groups if g.roll and not all(
-        log.has("roll_rad") and roll_signal(log) >= MIN_ROLL_SIGNAL_FLOORS * _floor("roll_rad")
-        for log in problem.logs)]
-    problems: dict[str, str] = {g.spec: "no roll signal in the log (roll_rad missing or "
-                                "flat); roll fields need one" for g in no_roll}
-    rel, corr = _predicted_ci(problem, theta0)
+    problems: dict[str, str] = {}
     for j, g in enumerate(groups):
-        if g.spec in problems:
-            continue
-        probe = theta0.copy()
-        probe[j] += 0.01
-        moved = vehicle_with(problem.base, groups, probe)
-        if all(np.array_equal(problem.level.signature(g, moved),
-                              problem.level.signature(g, problem.base)) for g in problem.logs):
+        if g.roll and not all(log.has("roll_rad") and roll_signal(log)
+                              >= MIN_ROLL_SIGNAL_FLOORS * _floor("roll_rad")
+                              for log in problem.logs):
+            problems[g.spec] = ("no roll signal in the log (roll_rad missing or flat); roll "
+                                "fields need one")
+        elif not _enters(problem, j):
             hint = (" (the axle cornering stiffness enters the 8-DOF only with the linear "
                     "tire: --tire linear, or a linear level)"
                     if problem.level.name == "8dof" and g.paths[0].startswith("axle_tires.")
                     else "")
             problems[g.spec] = f"does not enter the {problem.level.name} model{hint}"
-        elif not rel[j] <= MAX_PREDICTED_CI:
+    rest = [g for g in groups if g.spec not in problems]
+    if rest:
+        sub = dataclasses.replace(problem, groups=rest, evaluations=0)
+        rel, corr = _predicted_ci(sub, np.zeros(len(rest)))
+        problem.evaluations += sub.evaluations
+        for j, g in enumerate(rest):
+            if rel[j] <= MAX_PREDICTED_CI:
+                continue
             partner = ""
-            row = np.nan_to_num(np.abs(corr[j]), nan=0.0)
+            row = np.nan_to_num(np.abs(corr[j]), nan=0.0, posinf=0.0)
             row[j] = 0.0
             if row.size > 1 and row.max() > INDISTINGUISHABLE:
-                partner = f", cannot be told apart from {groups[int(np.argmax(row))].spec}"
+                partner = f", cannot be told apart from {rest[int(np.argmax(row))].spec}"
+            elif not math.isfinite(rel[j]):
+                others = [rest[k].spec for k in range(len(rest))
+                          if k != j and not math.isfinite(rel[k])]
+                if others:
+                    partner = f", cannot be told apart from {', '.join(others)}"
             what = ("not pinned at all" if not rel[j] <= 10.0
                     else f"pinned only to +-{100 * rel[j]:.0f} %")
             problems[g.spec] = f"{what} (95 %, instrument-level noise){partner}"
@@ -941,8 +971,7 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
     floors = [{c: _floor(c) for c in cs} for cs in chans]
     tick("excitation check")
     problem = _Problem(lvl, logs, base, groups, chans, floors, bias)
-    theta0 = np.zeros(len(groups))
-    groups = _excitation(problem, theta0, requested, notes)
+    groups = _excitation(problem, requested, notes)
     if not groups:
         raise ExcitationError(specs, "too little excitation in the record for every default "
                               "field; name the fields with --fit", logs[0].source)
@@ -967,8 +996,7 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
     _, jac = problem.jacobian(sol.x, central=True)
     cov = _covariance(jac)
     sd = np.sqrt(np.abs(np.diag(cov)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(sd, sd)
+    corr = _correlation(cov, sd)
     vehicle = vehicle_with(base, groups, sol.x, name or f"{base.name}_fitted")
     values: list[FittedValue] = []
     for j, g in enumerate(groups):

@@ -259,7 +259,7 @@ def test_degenerate_and_absent_fields_are_named(linear_bag, tmp_path, capsys) ->
     """The 3-DOF carries only K_phi,f + K_phi,r (roll3dof): the two fitted apart are refused as
     not to be told apart; a roll field with no roll channel is refused as such; the 8-DOF with
     its STI tire does not read the axle cornering stiffness (a structural refusal with the way
-    out)."""
+    out, naming it alone: the yaw inertia beside it is pinned)."""
     base, _ = _vehicles()
     log = load_log(linear_bag)
     with pytest.raises(ExcitationError) as exc:
@@ -273,8 +273,9 @@ def test_degenerate_and_absent_fields_are_named(linear_bag, tmp_path, capsys) ->
     assert exc.value.fields == (KPHI,) and "no roll signal" in str(exc.value)
     short = _bag(load_vehicle("table_8_1"), _random_steer(1.0), "8dof", tmp_path / "sti")
     code, lines = _cli(capsys, str(short), "--vehicle", "table_8_1", "--level", "8dof",
-                       "--fit", CR)
+                       "--fit", CR, IZ)
     assert code == 2 and len(lines) == 1
+    assert lines[0].startswith(f"fourws identify: error: {CR}: too little excitation")
     assert "does not enter the 8dof model" in lines[0] and "--tire linear" in lines[0]
 
 
