@@ -59,6 +59,7 @@ import scipy.signal
 from fourws_analysis import frequency as fq
 from fourws_analysis.linear import RUN_CHANNELS, _standard_outputs
 from fourws_analysis.measured import COLUMN_BY_NAME, MIN_SAMPLES, MeasuredLog
+from fourws_run.interface import WHEELS
 from fourws_sim.drivers import SpeedHoldDriver, SpeedHoldSpec
 from fourws_sim.errors import DivergedError, FourwsError, ParameterError
 from fourws_sim.maneuvers.esc import phaseless_lowpass
@@ -395,7 +396,6 @@ class EightDofLevel(Level):
         self.tire = tire
 
     def check(self, log: MeasuredLog, vehicle: Vehicle) -> None:
-        self._step(log)
         Simulator(vehicle, model="8dof", dt_s=self._step(log)[0], tire=self.tire)
 
     @staticmethod
@@ -421,8 +421,8 @@ class EightDofLevel(Level):
         driver = SpeedHoldDriver(SpeedHoldSpec(), vehicle)
         front, rear = steer_inputs(log, vehicle)
         inp = sim.model.INPUT
-        drive = [int(inp[f"DRIVE_{w}"]) for w in ("FL", "FR", "RL", "RR")]
-        brake = [int(inp[f"BRAKE_{w}"]) for w in ("FL", "FR", "RL", "RR")]
+        drive = [int(inp[f"DRIVE_{w}"]) for w in WHEELS]
+        brake = [int(inp[f"BRAKE_{w}"]) for w in WHEELS]
         u = np.zeros(len(inp))
         out = {ch: np.empty(log.time_s.size) for ch in self.outputs}
         t = log.time_s - log.time_s[0]
@@ -636,8 +636,9 @@ class FitResult:
     channels : list of ChannelFit
     frequency : list of FrequencyFit
     logs : list of MeasuredLog
-    measured, model : list of dict
-        Per log, the compared channels (measured, and the fitted model's plus its bias).
+    model : list of dict
+        Per log, the fitted model's compared channels plus their fitted biases (the measured
+        ones are in ``logs``).
     evaluations : int
         Model runs of the fit.
     elapsed_s : float
@@ -983,7 +984,7 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
                      for g, cs in zip(logs, chans)]
     tick("fit, pass 1")
     sol = scipy.optimize.least_squares(problem.weighted, theta0, bounds=bounds,
-                                       x_scale=1.0, xtol=1e-10, ftol=1e-12, gtol=1e-12,
+                                       x_scale=1.0, xtol=1e-6, ftol=1e-8, gtol=1e-8,
                                        max_nfev=60)
     # ... pass 2: by the residual noise each channel shows (its floor at least), inflated for
     # correlated residuals; its Jacobian at the optimum gives the covariance
@@ -991,7 +992,7 @@ def identify(logs: Sequence[MeasuredLog], base: Vehicle, level: str = "auto",
     problem.sigma = [{c: _sigma(e[c], _floor(c)) for c in cs} for e, cs in zip(errs, chans)]
     tick("fit, pass 2")
     sol = scipy.optimize.least_squares(problem.weighted, sol.x, bounds=bounds, x_scale=1.0,
-                                       xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=60)
+                                       xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=60)
     tick("uncertainty")
     _, jac = problem.jacobian(sol.x, central=True)
     cov = _covariance(jac)

@@ -508,6 +508,36 @@ def _swd_metrics(log: MeasuredLog) -> fmvss126.SineWithDwellResult:
 
 # ------------------------------------------------------------------------------ entry
 
+#: Curves whose band ``--band`` may set: the cross-plots and the time-history channels.
+BAND_KEYS: tuple[str, ...] = (*(p.key for p in CROSS_PLOTS), *HISTORY_BANDS)
+
+
+def parse_band(text: str) -> tuple[str, Band]:
+    """``CURVE=X_OFFSET,X_GAIN,Y_OFFSET,Y_GAIN`` (``fourws validate --band``) as the curve's
+    key and its band (display units of the curve; time histories: x is the time, s).
+
+    Raises
+    ------
+    ParameterError
+        An unknown curve, not four numbers, a negative number or a band of zero width.
+    """
+    key, _, numbers = text.partition("=")
+    key = key.strip()
+    if key not in BAND_KEYS:
+        raise ParameterError("--band", f"unknown curve {key!r} (valid: {', '.join(BAND_KEYS)})")
+    try:
+        values = [float(v) for v in numbers.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 4 or not all(math.isfinite(v) and v >= 0.0 for v in values):
+        raise ParameterError("--band", f"{text!r}: give {key}=X_OFFSET,X_GAIN,Y_OFFSET,Y_GAIN, "
+                             "four numbers >= 0")
+    if values[0] == 0.0 or values[2] == 0.0:
+        raise ParameterError("--band", f"{text!r}: the offsets must be > 0 (a band of zero "
+                             "width at zero)")
+    return key, Band(*values, source=f"--band {text}")
+
+
 def choose_standard(standard: str, sim: MeasuredLog, ref: MeasuredLog) -> str:
     """``standard``, or for ``auto`` the one the runs' maneuver asks for (:data:`AUTO_STANDARD`,
     else ``band``).
@@ -604,8 +634,8 @@ def _sine_with_dwell(result: ValidationResult, over: Mapping[str, Band],
                             f"{'passes' if mr.passed else 'fails'}")
 
 
-__all__ = ["AUTO_STANDARD", "BIN_WIDTH_MPS2", "Band", "CROSS_PLOTS", "CrossPlot", "CurveResult",
+__all__ = ["AUTO_STANDARD", "BAND_KEYS", "BIN_WIDTH_MPS2", "Band", "CROSS_PLOTS", "CrossPlot", "CurveResult",
            "DEFAULT_REQUIRED_SHARE", "HISTORY_BANDS", "MetricComparison", "STANDARDS",
            "SWD_HISTORIES", "SWD_METRIC_TOLERANCES", "ValidationResult", "band_distance",
            "band_edges", "binned_curve", "choose_standard", "cross_plot", "history_curve",
-           "steady_samples", "validate"]
+           "parse_band", "steady_samples", "validate"]

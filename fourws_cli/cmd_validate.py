@@ -29,6 +29,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-share", type=float, default=None, metavar="F",
                         help="share of each curve that must lie in its band, 0-1 (default "
                              "1: the whole curve)")
+    parser.add_argument("--band", action="append", default=[], metavar="CURVE=AX,BX,AY,BY",
+                        help="a band other than the default: eps_x = AX + BX|x|, eps_y = AY + "
+                             "BY|y| in the curve's units (curves: steering_wheel_angle, "
+                             "sideslip, roll, yaw_rate_gain, or a channel for time histories)")
     parser.add_argument("--report", metavar="DIR",
                         help="write DIR/index.html, DIR/curves.png and DIR/validation.json")
     parser.add_argument("--dt", type=float, default=None, metavar="S",
@@ -41,12 +45,13 @@ def run(args: argparse.Namespace) -> int:
     # scipy and the bag reader: not for `fourws --help`
     from fourws_analysis.measured import load_log
     from fourws_analysis.report_validate import write_validate_report
-    from fourws_analysis.validate import DEFAULT_REQUIRED_SHARE, validate
+    from fourws_analysis.validate import DEFAULT_REQUIRED_SHARE, parse_band, validate
 
+    bands = dict(parse_band(text) for text in args.band)
     sim = load_log(args.simulation, args.dt)
     ref = load_log(args.reference, args.dt)
     share = DEFAULT_REQUIRED_SHARE if args.min_share is None else args.min_share
-    result = validate(sim, ref, args.standard, share)
+    result = validate(sim, ref, args.standard, share, bands)
     index = write_validate_report(result, args.report) if args.report else None
     if args.json:
         print(json.dumps(result.to_dict(), indent=2))

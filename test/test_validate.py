@@ -96,6 +96,14 @@ def test_front_stiffness_20_percent_low_fails_the_gain(ramps, capsys) -> None:
     assert main(["validate", str(soft), str(base)]) == 1
     out = capsys.readouterr().out
     assert "FAILED" in out and "yaw-rate gain r/δH: 0.0 % inside" in out
+    # a band of 0.4 1/s holds the soft car's gain (at most 0.35 1/s off, the numbers above)
+    assert main(["validate", str(soft), str(base), "--json",
+                 "--band", "yaw_rate_gain=0.1,0.06,0.4,0"]) == 1
+    data = json.loads(capsys.readouterr().out)
+    assert data["curves"]["yaw_rate_gain"]["share_inside"] == 1.0
+    assert data["curves"]["yaw_rate_gain"]["band"]["y_offset"] == 0.4
+    assert main(["validate", str(soft), str(base), "--band", "yaw_gain=1,1,1,1"]) == 2
+    assert "unknown curve 'yaw_gain'" in capsys.readouterr().err
 
 
 def _plateaus(path: Path, gains: tuple[float, ...]) -> Path:
