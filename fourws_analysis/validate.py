@@ -634,8 +634,8 @@ def _sine_with_dwell(result: ValidationResult, over: Mapping[str, Band],
                             f"{'passes' if mr.passed else 'fails'}")
 
 
-__all__ = ["AUTO_STANDARD", "BAND_KEYS", "BIN_WIDTH_MPS2", "Band", "CROSS_PLOTS", "CrossPlot", "CurveResult",
-           "DEFAULT_REQUIRED_SHARE", "HISTORY_BANDS", "MetricComparison", "STANDARDS",
-           "SWD_HISTORIES", "SWD_METRIC_TOLERANCES", "ValidationResult", "band_distance",
-           "band_edges", "binned_curve", "choose_standard", "cross_plot", "history_curve",
-           "parse_band", "steady_samples", "validate"]
+__all__ = ["AUTO_STANDARD", "BAND_KEYS", "BIN_WIDTH_MPS2", "Band", "CROSS_PLOTS", "CrossPlot",
+           "CurveResult", "DEFAULT_REQUIRED_SHARE", "HISTORY_BANDS", "MetricComparison",
+           "STANDARDS", "SWD_HISTORIES", "SWD_METRIC_TOLERANCES", "ValidationResult",
+           "band_distance", "band_edges", "binned_curve", "choose_standard", "cross_plot",
+           "history_curve", "parse_band", "steady_samples", "validate"]
