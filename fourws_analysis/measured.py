@@ -336,11 +336,20 @@ def _read_csv(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[str],
     return time_s, values, notes, line_of
 
 
+def _pyarrow_parquet(field_name: str, source: str) -> Any:
+    """``pyarrow.parquet``, or a ParameterError saying how to install it."""
+    try:
+        # pyarrow: a pip-only dependency (no rosdep key); only Parquet files need it
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise ParameterError(field_name, "Parquet needs pyarrow (pip install pyarrow); CSV "
+                             "does not", source) from None
+    return pq
+
+
 def _read_parquet(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], list[str], None]:
     """Time, channels (SI), notes (and no file lines: samples are numbered)."""
-    # pyarrow: a pip-only dependency (no rosdep key); only Parquet logs need it
-    import pyarrow.parquet as pq
-
+    pq = _pyarrow_parquet("data", str(path))
     try:
         table = pq.read_table(path)
     except (OSError, ValueError) as exc:  # pyarrow.ArrowInvalid is a ValueError
@@ -511,9 +520,8 @@ def write_table(log: MeasuredLog, path: str | Path, fmt: str,
             np.savetxt(fh, table, fmt="%.17g", delimiter=",")
         return out
     if fmt == "parquet":
-        # pyarrow: a pip-only dependency (no rosdep key); only Parquet output needs it
-        import pyarrow as pa
-        import pyarrow.parquet as pq
+        pq = _pyarrow_parquet("--format", str(out))
+        import pyarrow as pa  # pyarrow: importable, pyarrow.parquet just was
 
         units = {TIME_COLUMN: "s", **{c.name: c.unit for c in COLUMNS}}
         meta = {"fourws.units": json.dumps({n: units.get(n, "") for n in names}),

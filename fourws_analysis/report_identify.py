@@ -63,11 +63,11 @@ class _Raw(str):
 
 def value_rows(result: FitResult) -> list[list[Any]]:
     """One row per fitted field: field, unit, base, fitted, ±95 %, relative, change."""
-    rows = []
+    rows: list[list[Any]] = []
     for v in result.values:
-        change = None if not v.base else 100.0 * (v.value / v.base - 1.0)
-        rows.append([v.path, v.unit, v.base, v.value, v.ci95, 100.0 * v.relative_ci95,
-                     change])
+        change = None if not v.base else f"{100.0 * (v.value / v.base - 1.0):+.2f}"
+        rows.append([v.path, v.unit, f"{v.base:.6g}", f"{v.value:.6g}", f"{v.ci95:.3g}",
+                     f"{100.0 * v.relative_ci95:.3g}", change])
     return rows
 
 

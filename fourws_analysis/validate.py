@@ -475,9 +475,10 @@ def cross_plot(sim: MeasuredLog, ref: MeasuredLog, plot: CrossPlot,
 
 def history_curve(sim: MeasuredLog, ref: MeasuredLog, channel: str, start_sim: float,
                   start_ref: float, span_s: float, band: Band, label: str, scale: float,
-                  unit: str, required_share: float) -> CurveResult:
+                  unit: str, required_share: float, x_label: str = "time") -> CurveResult:
     """A channel's time history of ``sim`` against ``ref`` over ``span_s`` from their start
-    times (the simulation resampled onto the reference's samples)."""
+    times (the simulation resampled onto the reference's samples); ``x_label`` says from
+    what the time counts."""
     tr = ref.time_s - start_ref
     ts = sim.time_s - start_sim
     sel = (tr >= 0.0) & (tr <= span_s)
@@ -485,7 +486,7 @@ def history_curve(sim: MeasuredLog, ref: MeasuredLog, channel: str, start_sim: f
     ry = ref.channels[channel][sel] * scale
     inside = (rx >= ts[0]) & (rx <= ts[-1])
     y = np.where(inside, np.interp(rx, ts, sim.channels[channel] * scale), math.nan)
-    return CurveResult(channel, label, "time", "s", unit, band, rx, ry, rx.copy(), y,
+    return CurveResult(channel, label, x_label, "s", unit, band, rx, ry, rx.copy(), y,
                        band_distance(rx, ry, rx, y, band), required_share)
 
 
@@ -603,7 +604,8 @@ def validate(sim: MeasuredLog, ref: MeasuredLog, standard: str = "auto",
             label, scale, unit, band = _history_band(channel)
             result.curves.append(history_curve(sim, ref, channel, sim.time_s[0],
                                                ref.time_s[0], span, over.get(channel, band),
-                                               label, scale, unit, required_share))
+                                               label, scale, unit, required_share,
+                                               "time from the start of the record"))
     return result
 
 
@@ -619,7 +621,8 @@ def _sine_with_dwell(result: ValidationResult, over: Mapping[str, Band],
         label, scale, unit, band = _history_band(channel)
         result.curves.append(history_curve(result.simulation, result.reference, channel,
                                            ms.bos_s, mr.bos_s, span, over.get(channel, band),
-                                           label, scale, unit, required_share))
+                                           label, scale, unit, required_share,
+                                           "time from the beginning of steer"))
     ds, dr = ms.to_dict(), mr.to_dict()
     units = {"peak_yaw_rate_degps": "deg/s", "yaw_ratio_1_00": "–", "yaw_ratio_1_75": "–",
              "lateral_displacement_m": "m"}
