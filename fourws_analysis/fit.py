@@ -794,7 +794,9 @@ def _covariance(jac: np.ndarray) -> np.ndarray:
 
 def _check_steering_units(log: MeasuredLog, vehicle: Vehicle) -> None:
     """δH/N against the kinematic steer L r/U in the linear range (:data:`STEER_YAW_RATIO`):
-    a factor of 57 means degrees given as radians."""
+    a factor of 57 means degrees given as radians (files only: a bag is SI)."""
+    if log.kind == "bag":
+        return
     u = log.channels["speed_mps"]
     sel = (np.abs(log.channels["lateral_accel_mps2"]) <= LINEAR_RANGE_MPS2) & (u > 2.0)
     if np.count_nonzero(sel) < MIN_SAMPLES:

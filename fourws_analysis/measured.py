@@ -16,11 +16,12 @@ to SI on reading. Anything else in the file (other columns, comment lines starti
 
 Bad data is refused with one :class:`~fourws_sim.errors.ParameterError` naming the column
 and the file: a missing required column, a value that is not a finite number, time that does
-not increase or has a gap, a record that is too short, and values whose size cannot be right
-in the stated unit -- beyond what any car does (:attr:`Column.limit`), or inconsistent with
-another channel: the lateral acceleration of a car is its speed times its yaw rate up to its
-sideslip rate, so with ``a_y`` and ``U r`` of different size one of the three is in another
-unit than its name says (yaw rate in deg/s, speed in km/h, acceleration in g).
+not increase or has a gap, a record that is too short, and (files: a fourws bag is SI by
+construction) values whose size cannot be right in the stated unit -- beyond what any car
+does (:attr:`Column.limit`), or inconsistent with another channel: the lateral acceleration
+of a car is its speed times its yaw rate up to its sideslip rate, so with ``a_y`` and ``U r``
+of different size one of the three is in another unit than its name says (yaw rate in deg/s,
+speed in km/h, acceleration in g).
 """
 
 from __future__ import annotations
@@ -165,6 +166,9 @@ class MeasuredLog:
         The run configuration of a fourws bag (vehicle, maneuver, law); empty for a CSV.
     notes : list of str
         What the reader did (conversions, resampling, columns left alone).
+    kind : str
+        ``csv``, ``parquet`` or ``bag`` (a bag is SI by construction: its units are not
+        checked).
     """
 
     name: str
@@ -174,6 +178,7 @@ class MeasuredLog:
     channels: dict[str, np.ndarray]
     config: dict[str, Any] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    kind: str = "csv"
 
     @property
     def duration_s(self) -> float:
@@ -232,14 +237,16 @@ def load_log(path: str | Path, dt_s: float | None = None) -> MeasuredLog:
         time_s, columns, notes, line_of = (_read_csv(p) if p.suffix.lower() == ".csv"
                                            else _read_parquet(p))
         log = _from_columns(p.stem, str(p), time_s, columns, notes, line_of, dt_s)
+        log.kind = p.suffix.lower()[1:]
+        check_log(log)
     elif p.is_dir() or p.suffix == ".mcap":
         log = log_from_run(load_bag(p), dt_s)
+        check_log(log, units=False)
     elif not p.exists():
         raise ParameterError("data", f"no such file or bag {str(p)!r}")
     else:
         raise ParameterError("data", f"{str(p)!r} is neither a .csv or .parquet log nor a "
                              "fourws bag (folder or .mcap)")
-    check_log(log)
     return log
 
 
@@ -260,7 +267,7 @@ def log_from_run(run: RunData, dt_s: float | None = None) -> MeasuredLog:
         notes.append(f"the bag has no {REAR_STEER_CMD}: no rear-steer column")
     return MeasuredLog(name=uniform.name, source=run.path, time_s=uniform.time_s,
                        dt_s=uniform.dt_s, channels=channels, config=dict(run.config),
-                       notes=notes)
+                       notes=notes, kind="bag")
 
 
 def hold(time_s: np.ndarray, values: np.ndarray, grid: np.ndarray,
@@ -414,8 +421,11 @@ def _from_columns(name: str, source: str, time_s: np.ndarray, columns: dict[str,
 
 # ------------------------------------------------------------------------------ checks
 
-def check_log(log: MeasuredLog) -> None:
-    """Refuse a log that is too short or whose values cannot be right in their units.
+def check_log(log: MeasuredLog, units: bool = True) -> None:
+    """Refuse a log that lacks a required channel, is too short, has values that are not
+    finite, or (``units``) values that cannot be right in their units. A fourws bag is SI by
+    construction: :func:`load_log` checks the units of files only (a spinning or diverging
+    run is still a true record).
 
     Raises
     ------
@@ -429,10 +439,24 @@ def check_log(log: MeasuredLog) -> None:
                              f"{MIN_DURATION_S:g} s and {MIN_SAMPLES} samples", log.source)
     for c in COLUMNS:
         arr = log.channels.get(c.name)
+        if arr is not None and not np.all(np.isfinite(arr)):
+            raise ParameterError(c.name, "has values that are not finite numbers", log.source)
+    if units:
+        check_units(log)
+
+
+def check_units(log: MeasuredLog) -> None:
+    """Refuse values that cannot be right in their units (module docstring).
+
+    Raises
+    ------
+    ParameterError
+        Naming the column and the file.
+    """
+    for c in COLUMNS:
+        arr = log.channels.get(c.name)
         if arr is None:
             continue
-        if not np.all(np.isfinite(arr)):
-            raise ParameterError(c.name, "has values that are not finite numbers", log.source)
         k = int(np.argmax(np.abs(arr)))
         if abs(arr[k]) > c.limit:
             alt = " or ".join(c.alternates)
@@ -521,7 +545,7 @@ def write_table(log: MeasuredLog, path: str | Path, fmt: str,
         return out
     if fmt == "parquet":
         pq = _pyarrow_parquet("--format", str(out))
-        import pyarrow as pa  # pyarrow: importable, pyarrow.parquet just was
+        import pyarrow as pa  # pyarrow: optional (pip only), _pyarrow_parquet found it
 
         units = {TIME_COLUMN: "s", **{c.name: c.unit for c in COLUMNS}}
         meta = {"fourws.units": json.dumps({n: units.get(n, "") for n in names}),
@@ -563,5 +587,5 @@ def topic_columns(run: RunData, topics: Sequence[str], grid: np.ndarray) -> dict
 
 
 __all__ = ["COLUMNS", "COLUMN_BY_NAME", "Column", "FORMATS", "MeasuredLog", "REQUIRED_COLUMNS",
-           "TIME_COLUMN", "check_log", "columns_markdown", "hold", "load_log", "log_from_run",
-           "topic_columns", "write_table"]
+           "TIME_COLUMN", "check_log", "check_units", "columns_markdown", "hold", "load_log",
+           "log_from_run", "topic_columns", "write_table"]

@@ -37,8 +37,7 @@ def run(args: argparse.Namespace) -> int:
     """Export every bag; exit code 0."""
     # the bag reader and numpy: not for `fourws --help`
     from fourws_analysis.bag import load_bag
-    from fourws_analysis.measured import (FORMATS, check_log, log_from_run, topic_columns,
-                                          write_table)
+    from fourws_analysis.measured import FORMATS, log_from_run, topic_columns, write_table
 
     if args.format not in FORMATS:
         raise ParameterError("--format", f"unknown format {args.format!r} (valid: "
@@ -49,7 +48,6 @@ def run(args: argparse.Namespace) -> int:
     for path in args.bags:
         run_data = load_bag(path, allow_incomplete=args.allow_incomplete)
         log = log_from_run(run_data, args.dt)
-        check_log(log)
         extra = topic_columns(run_data, args.topics, log.time_s)
         name, k = log.name, 2
         while name in written:  # two bags of one run name
