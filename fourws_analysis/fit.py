@@ -64,7 +64,7 @@ from fourws_sim.drivers import SpeedHoldDriver, SpeedHoldSpec
 from fourws_sim.errors import DivergedError, FourwsError, ParameterError
 from fourws_sim.maneuvers.esc import phaseless_lowpass
 from fourws_sim.models import eightdof, get_model
-from fourws_sim.params import UNCHECKED_KEY, Vehicle, vehicle_from_mapping
+from fourws_sim.params import Vehicle, vehicle_from_mapping
 from fourws_sim.simulator import Simulator
 
 #: Channels compared with the model, where both the log and the model level have them.
@@ -1098,19 +1098,45 @@ def _frequency_fit(log: MeasuredLog, model: Mapping[str, np.ndarray],
 
 # ------------------------------------------------------------------------------ the file
 
-def _yaml_number(value: Any) -> str:
+def _yaml_scalar(value: Any) -> str:
+    """A scalar of a vehicle mapping in YAML (floats exactly, strings JSON-quoted)."""
+    if value is None:
+        return "null"
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float):
         return repr(value)
+    if isinstance(value, str):
+        return _quoted(value)
     return str(value)
+
+
+def _yaml_lines(value: Any, indent: int, comments: Mapping[str, str],
+                prefix: str = "") -> list[str]:
+    """Block YAML of a mapping or list at ``indent`` spaces; ``comments`` by dotted key."""
+    pad = " " * indent
+    lines: list[str] = []
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            dotted = f"{prefix}{key}"
+            if isinstance(item, (Mapping, list, tuple)) and item:
+                lines.append(f"{pad}{key}:")
+                lines.extend(_yaml_lines(item, indent + 2, comments, f"{dotted}."))
+            else:
+                text = ("{}" if isinstance(item, Mapping) else "[]"
+                        if isinstance(item, (list, tuple)) else _yaml_scalar(item))
+                note = comments.get(dotted)
+                lines.append(f"{pad}{key}: {text}" + (f"   # {note}" if note else ""))
+    else:
+        for item in value:
+            lines.append(f"{pad}- {_yaml_scalar(item)}")
+    return lines
 
 
 def vehicle_yaml(result: FitResult) -> str:
     """The fitted vehicle as a vehicle file (the layout of ``config/vehicles``), every fitted
     value commented with its interval and its data; :func:`fourws_sim.params.load_vehicle`
     reads it."""
-    fitted = {v.path: v for v in result.values}
     data = ", ".join(f"{g.name} ({g.duration_s:.1f} s{', ' + g.maneuver if g.maneuver else ''})"
                      for g in result.logs)
     lines = [
@@ -1124,31 +1150,15 @@ def vehicle_yaml(result: FitResult) -> str:
                      f"(signal {c.rms_signal:.4g}, bias {c.bias:+.3g})")
     for a, b, r in result.indistinguishable:
         lines.append(f"# Cannot be told apart (correlation {r:+.3f}): {a} and {b}.")
-    mapping = result.vehicle.to_dict()
-    lines.append(f"name: {_quoted(mapping['name'])}")
-    description = f"{result.base.name} fitted on the {result.level} level to {data}"
-    lines.append(f"description: {_quoted(description)}")
-    for sub, values in mapping.items():
-        if sub in ("name", "description", UNCHECKED_KEY) or not isinstance(values, Mapping):
-            continue
-        lines.append(f"{sub}:")
-        for key, value in values.items():
-            if isinstance(value, Mapping):
-                lines.append(f"  {key}:" + ("" if value else " {}"))
-                for k2, v2 in value.items():
-                    lines.append(f"    {k2}: {_yaml_number(v2)}")
-                continue
-            text = _quoted(value) if isinstance(value, str) else _yaml_number(value)
-            fv = fitted.get(f"{sub}.{key}")
-            if fv is not None:
-                change = (f"{100 * (fv.value / fv.base - 1):+.1f} % from the base "
-                          f"{fv.base:.6g}" if fv.base else f"base {fv.base:g}")
-                text += (f"   # fitted: {fv.value:.6g} +- {fv.ci95:.3g} {fv.unit} (95 %), "
-                         f"{change}; {result.level} on {data}")
-            lines.append(f"  {key}: {text}")
-    if mapping.get(UNCHECKED_KEY):
-        lines.append(f"{UNCHECKED_KEY}:")
-        lines.extend(f"  - {_quoted(n)}" for n in mapping[UNCHECKED_KEY])
+    comments = {}
+    for fv in result.values:
+        change = (f"{100 * (fv.value / fv.base - 1):+.1f} % from the base {fv.base:.6g}"
+                  if fv.base else f"base {fv.base:g}")
+        comments[fv.path] = (f"fitted: {fv.value:.6g} +- {fv.ci95:.3g} {fv.unit} (95 %), "
+                             f"{change}; {result.level} on {data}")
+    mapping = dict(result.vehicle.to_dict())
+    mapping["description"] = f"{result.base.name} fitted on the {result.level} level to {data}"
+    lines.extend(_yaml_lines(mapping, 0, comments))
     return "\n".join(lines) + "\n"
 
 

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from fourws_analysis import bag as B
-from fourws_analysis.fit import ExcitationError, identify
+from fourws_analysis.fit import ExcitationError, identify, vehicle_yaml
 from fourws_analysis.measured import MeasuredLog, load_log, write_table
 from fourws_cli.main import main
 from fourws_run.closed_loop import run_closed_loop
@@ -296,3 +296,29 @@ def test_step_steer_cannot_tell_front_from_rear(tmp_path) -> None:
     assert result.correlation[0, 0] == pytest.approx(1.0)
     for v in result.values:
         assert v.value == pytest.approx(_true(truth, v.path), rel=0.02)
+
+
+def test_vehicle_file_reloads_every_value(tmp_path) -> None:
+    """The written vehicle file, read by load_vehicle, is the fitted vehicle: every subsystem,
+    the nested tire coefficients (STI, a TMeasy block) and the unchecked-fields list equal
+    (source: the fitted Vehicle's own mapping)."""
+    mapping = load_vehicle("table_8_1").to_dict()
+    mapping["tire"]["tmeasy"] = {"nominal_load_n": 4000.0, "unloaded_radius_m": 0.3}
+    mapping["chassis"]["mass_kg"] = 1.5e5  # a heavy truck beyond the plausible 1e5 kg ...
+    mapping["roll"]["sprung_mass_kg"] = 1.2e5
+    mapping["unchecked_fields"] = ["chassis.mass_kg", "roll.sprung_mass_kg"]  # ... accepted
+    base = vehicle_from_mapping(mapping, "truck")
+    man = {"type": "step_steer", "name": "step", "initial_speed_mps": 23.6, "duration_s": 3.0,
+           "steer_input": "road_wheel", "amplitude_rad": 0.005, "start_s": 0.5,
+           "ramp_time_s": 0.1}
+    log = load_log(_bag(base, man, "2dof", tmp_path / "truck"))
+    result = identify([log], base, level="2dof", fields=[CR])
+    path = tmp_path / "fitted.yaml"
+    path.write_text(vehicle_yaml(result))
+    loaded = load_vehicle(path).to_dict()
+    expected = result.vehicle.to_dict()
+    assert loaded.pop("description") == ("table_8_1 fitted on the 2dof level to truck (3.0 s, "
+                                         "step_steer)")
+    expected.pop("description")
+    assert loaded == expected
+    assert loaded["tire"]["tmeasy"] == {"nominal_load_n": 4000.0, "unloaded_radius_m": 0.3}
