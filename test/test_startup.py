@@ -9,18 +9,25 @@ first driver input). bench/startup.py runs the long version (150 runs)."""
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from fourws_ros.graph_run import run_graph
+
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "bench"))
 
-from startup import short_config  # noqa: E402  (the benchmark's own run description)
 
-from fourws_ros.graph_run import run_graph  # noqa: E402
+def _bench():
+    """bench/startup.py (the benchmark's own run description)."""
+    spec = importlib.util.spec_from_file_location("startup_bench", ROOT / "bench" / "startup.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
 
 RUNS_PER_CONTROLLER = 5
 
@@ -40,7 +47,7 @@ def cpu_hog():
 def test_user_controllers_start_every_time_beside_a_cpu_hog(tmp_path, cpu_hog, controller):
     """Five 1-s lockstep runs per controller: each ends ok with a complete bag of 100 states
     answered (no hang, no failure)."""
-    config = short_config(1.0, controller)
+    config = _bench().short_config(1.0, controller)
     for k in range(RUNS_PER_CONTROLLER):
         run = run_graph(config, tmp_path, run_name=f"{controller}-{k}", echo=lambda _: None)
         assert run.ok, f"run {k}: {run.reason}"
