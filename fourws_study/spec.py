@@ -76,7 +76,7 @@ from fourws_control import make_loop_law
 from fourws_control.registry import LAWS
 from fourws_run.config import RunConfig, software_versions
 from fourws_run.scenario import Scenario, load_scenario, scenario_from_mapping
-from fourws_sim.config_yaml import plain_copy
+from fourws_sim.config_yaml import parse_yaml, plain_copy, read_config_text
 from fourws_sim.errors import FourwsError, ParameterError, UnknownNameError
 from fourws_sim.maneuvers import ManeuverSpec, maneuver_spec_from_mapping
 from fourws_sim.models import eightdof
@@ -528,12 +528,8 @@ def load_study(path_or_name: str | Path) -> Study:
         An unknown law, vehicle, maneuver or scenario name.
     """
     path = resolve_config_path("study", path_or_name, STUDY_DIR)
-    text = path.read_text()
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        problem = " ".join(str(exc).split())
-        raise ParameterError("<file>", f"not valid YAML ({problem})", str(path)) from None
+    text = read_config_text(path)
+    data = parse_yaml(text, str(path))
     return study_from_mapping(data, str(path), text, default_name=path.stem)
 
 

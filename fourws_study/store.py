@@ -32,9 +32,9 @@ from typing import Any, Sequence
 
 import pyarrow as pa
 import pyarrow.parquet as pq
-import yaml
 
 from fourws_run.config import software_versions
+from fourws_sim.config_yaml import parse_yaml
 from fourws_sim.errors import ParameterError
 from fourws_study.point import columns
 from fourws_study.spec import Study
@@ -64,7 +64,7 @@ def study_hash(study: Study) -> str:
     """What identifies a study's results: its file's content without the parts that do not
     change a row (``description``, ``report``) and its resolved base run (a changed vehicle
     file changes the runs even when the study file did not)."""
-    data = yaml.safe_load(study.text)
+    data = parse_yaml(study.text, study.source)
     if isinstance(data, dict):
         data = {k: v for k, v in data.items() if k not in ("description", "report")}
     base = study.base_config().to_dict()

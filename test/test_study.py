@@ -389,6 +389,44 @@ def test_bad_study_files_are_one_line_errors(tmp_path, capsys, data, names):
         (tmp_path / "out" / "blocks").iterdir())
 
 
+def _study_refused(tmp_path, capsys, path: Path, *needles: str) -> str:
+    """``fourws study PATH`` ends with exit code 2 and one line naming ``path`` and the
+    needles, with no traceback and no output folder."""
+    code = fourws_main(["study", str(path), "--out", str(tmp_path / "out"), "--no-report"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "Traceback" not in err
+    line, = err.strip().splitlines()
+    assert line.startswith("fourws study: error: ") and str(path) in line, line
+    for needle in needles:
+        assert needle in line, line
+    assert not (tmp_path / "out").exists()
+    return line
+
+
+def test_study_file_with_a_duplicate_key_is_refused(tmp_path, capsys):
+    """YAML forbids duplicate keys (YAML 1.2, 3.2.1.1): ``block_size`` given twice (lines 3
+    and 4 of the file) was read as its last value; it is refused naming both lines."""
+    path = tmp_path / "twice.yaml"
+    path.write_text("name: twice\nscenario: default\nblock_size: 8\nblock_size: 16\n")
+    _study_refused(tmp_path, capsys, path, "block_size", "duplicate key at line 4",
+                   "first at line 3")
+
+
+@pytest.mark.parametrize("data, needle", [
+    ("name: x\nscenario: default\ndescription: Fahrzeug f\u00fcr Tests\n".encode("latin-1"),
+     "not UTF-8 text (byte 0xfc at offset 49)"),
+    ("name: x\nscenario: default\n".encode("utf-16"), "UTF-16"),
+], ids=["latin1", "utf16"])
+def test_study_file_not_utf8_is_one_line(tmp_path, capsys, data, needle):
+    """A Latin-1 study file (the u-umlaut is byte 0xfc, at offset 49 counted by hand: 'name:
+    x' and its newline 8 bytes, 'scenario: default' and its newline 18, 'description:
+    Fahrzeug f' 23) and a UTF-16 one were a UnicodeDecodeError traceback."""
+    path = tmp_path / "encoded.yaml"
+    path.write_bytes(data)
+    _study_refused(tmp_path, capsys, path, needle)
+
+
 # ------------------------------------------------------------------ metrics
 
 def test_lane_change_clearance_of_straight_paths():
