@@ -138,7 +138,7 @@ def _rerun(args: argparse.Namespace, root: Path) -> int:
     study = study_of(root)
     config = study.config(study.point(args.point))
     try:
-        row = study_row(root, args.point)
+        row = study_row(root, study, args.point)
     except FourwsError:
         row = None
     out = args.out if args.out is not None else root / "reruns"

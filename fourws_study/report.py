@@ -365,7 +365,7 @@ def write_study_report(root: str | Path, study: Study, plots: bool = True) -> Pa
     root = Path(root)
     out = root / "report"
     out.mkdir(parents=True, exist_ok=True)
-    table = read_results(root)
+    table = read_results(root, study)
     laws = sorted(set(_column(table, "law")), key=str)
     status = list(_column(table, "status"))
     counts = {s: status.count(s) for s in ("ok", "spun", "diverged", "error")}

@@ -19,6 +19,16 @@ whatever kills the study, ``pyarrow.parquet.read_table("DIR/blocks")`` (or
 :func:`read_results`) reads every point finished so far, and ``--resume`` runs exactly the
 blocks that are not there (:meth:`StudyStore.missing_blocks`). All block files share one
 schema (:func:`fourws_study.point.columns`).
+
+A block file is checked whole before it counts: written with Parquet page checksums (CRC-32
+of every data page), read back with their verification, its columns those of the study and
+its points those of its block. ``--resume`` recomputes a block that fails (a flipped byte, a
+truncated or foreign file); :func:`read_results` (the merge, ``fourws study report``,
+``rerun``) refuses it in one line naming the file and the ``--resume`` that recomputes it,
+and refuses any other file in ``blocks/`` (a stray file would also break
+``read_table("DIR/blocks")``; names starting with ``.`` or ``_`` are ignored, as pyarrow
+ignores them). A flipped byte in a block file is caught either way: in a data page by its
+checksum, in the footer by the schema or as a file Parquet cannot read.
 """
 
 from __future__ import annotations
@@ -120,19 +130,80 @@ class StudyStore:
         """File of a finished block."""
         return self.root / BLOCKS / f"block-{block:06d}.parquet"
 
-    def _valid_block(self, block: int) -> bool:
+    def read_block(self, block: int) -> pa.Table:
+        """The rows of a finished block, checked whole (module docstring).
+
+        Raises
+        ------
+        ParameterError
+            The file is missing, damaged, or not this block of this study (field
+            ``<file>``, the file named, with the ``--resume`` that recomputes it).
+        """
         path = self.block_path(block)
-        if not path.is_file():
-            return False
+        again = (f"; `fourws study {self.study.source} --out {self.root} --resume` "
+                 "recomputes it")
         try:
-            table = pq.read_table(path, columns=["point"])
-        except (OSError, pa.ArrowInvalid):
+            table = pq.read_table(path, page_checksum_verification=True)
+        except FileNotFoundError:
+            raise ParameterError("<file>", f"missing (block {block} has not run){again}",
+                                 str(path)) from None
+        except (OSError, pa.ArrowException) as exc:
+            problem = " ".join(str(exc).split())[:160]
+            raise ParameterError("<file>", f"damaged Parquet block ({problem}){again}",
+                                 str(path)) from None
+        if not table.schema.equals(self.schema):
+            raise ParameterError("<file>", f"not a block of this study (its columns differ)"
+                                 f"{again}", str(path))
+        if table.column("point").to_pylist() != list(self.block_points(block)):
+            raise ParameterError("<file>", f"not block {block} of this study (other points)"
+                                 f"{again}", str(path))
+        return table
+
+    def _valid_block(self, block: int) -> bool:
+        try:
+            self.read_block(block)
+        except ParameterError:
             return False
-        return table.column("point").to_pylist() == list(self.block_points(block))
+        return True
 
     def missing_blocks(self) -> list[int]:
-        """Blocks with no complete file (a resumed study runs these)."""
+        """Blocks with no complete, intact file (a resumed study runs these again)."""
         return [b for b in range(self.n_blocks) if not self._valid_block(b)]
+
+    def check_strays(self) -> None:
+        """Refuse a file in ``blocks/`` that is no block file of this study.
+
+        Raises
+        ------
+        ParameterError
+            Naming the first such file.
+        """
+        names = {self.block_path(b).name for b in range(self.n_blocks)}
+        for path in sorted((self.root / BLOCKS).iterdir()):
+            if path.name in names or path.name.startswith((".", "_")):
+                continue
+            raise ParameterError("<file>", f"is not a block of this study (its blocks are "
+                                 f"{self.block_path(0).name} to "
+                                 f"{self.block_path(self.n_blocks - 1).name}); move it out "
+                                 f"of {self.root / BLOCKS}", str(path))
+
+    def read_results(self) -> pa.Table:
+        """Every finished row (the blocks that have a file), sorted by point.
+
+        Raises
+        ------
+        ParameterError
+            ``blocks/`` is missing or empty, holds a stray file (:meth:`check_strays`) or a
+            damaged block (:meth:`read_block`).
+        """
+        blocks = self.root / BLOCKS
+        if not blocks.is_dir():
+            raise ParameterError("DIR", f"{self.root} is not a study folder (no {BLOCKS}/)")
+        self.check_strays()
+        done = [b for b in range(self.n_blocks) if self.block_path(b).exists()]
+        if not done:
+            raise ParameterError("DIR", f"{self.root} has no finished block yet")
+        return pa.concat_tables([self.read_block(b) for b in done])
 
     def write_block(self, block: int, data: bytes) -> Path:
         """Write a finished block already encoded (:func:`encode_block`, done by the worker
@@ -174,6 +245,7 @@ class StudyStore:
             raise ParameterError("--resume", f"{self.root} has blocks but no {MANIFEST}; "
                                  "it is not a study folder")
         blocks.mkdir(parents=True, exist_ok=True)
+        self.check_strays()
         (self.root / "study.yaml").write_text(self.study.text)
         (self.root / "base_run_config.json").write_text(
             json.dumps(self.study.base_config().to_dict(), indent=2, default=str))
@@ -187,7 +259,7 @@ class StudyStore:
     def merge(self) -> tuple[Path, int]:
         """Write ``results.parquet`` from the finished blocks (sorted by point); returns the
         path and the number of rows."""
-        table = read_results(self.root)
+        table = self.read_results()
         path = self.root / RESULTS
         tmp = path.with_name(f".{path.name}.tmp")
         pq.write_table(table, tmp)
@@ -198,27 +270,22 @@ class StudyStore:
 def encode_block(table: pa.Table, table_schema: pa.Schema) -> bytes:
     """A block's rows as the bytes of its Parquet file (cast to the study's schema)."""
     sink = pa.BufferOutputStream()
-    pq.write_table(table.cast(table_schema), sink)
+    # page checksums: a flipped byte in the data is an error when read, not another number
+    pq.write_table(table.cast(table_schema), sink, write_page_checksum=True)
     return sink.getvalue().to_pybytes()
 
 
-def read_results(root: str | Path) -> pa.Table:
-    """Every finished row of the study in ``root`` (its ``blocks/``), sorted by point; works
-    on a study that is still running or was killed.
+def read_results(root: str | Path, study: Study) -> pa.Table:
+    """Every finished row of ``study`` in its folder ``root`` (``blocks/``), sorted by point;
+    works on a study that is still running or was killed.
 
     Raises
     ------
     ParameterError
-        ``root`` is not a study folder.
+        ``root`` is not a study folder, has no finished block, or holds a damaged block or a
+        stray file (:meth:`StudyStore.read_results`).
     """
-    blocks = Path(root) / BLOCKS
-    if not blocks.is_dir():
-        raise ParameterError("DIR", f"{root} is not a study folder (no {BLOCKS}/)")
-    files = sorted(blocks.glob("block-*.parquet"))
-    if not files:
-        raise ParameterError("DIR", f"{root} has no finished block yet")
-    table = pa.concat_tables([pq.read_table(f) for f in files])
-    return table.sort_by("point")
+    return StudyStore(Path(root), study, study.block_size).read_results()
 
 
 __all__ = ["BLOCKS", "MANIFEST", "RESULTS", "StudyStore", "encode_block", "read_results",
