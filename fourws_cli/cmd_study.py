@@ -76,10 +76,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _study(args: argparse.Namespace, target: str) -> int:
     from fourws_study.execute import check_size, run_study  # numba, pyarrow: not for --help
-    from fourws_study.report import write_study_report  # numba, pyarrow: not for --help
+    # numba, pyarrow: not for --help
+    from fourws_study.report import check_report, write_study_report
     from fourws_study.spec import load_study  # numba, pyarrow: not for --help
 
     study = load_study(target)
+    check_report(study)
     check_size(study, args.force)
     out = args.out if args.out is not None else Path("studies") / study.name
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)

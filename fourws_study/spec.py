@@ -26,7 +26,7 @@ A study file (``config/studies/<name>.yaml``)::
           truncate: [0.7, 1.4]    # optional bounds of the draw (inverse-CDF truncation)
     report:                       # optional (fourws_study.report)
       map_axes: [speed_kmh, belief.cornering_stiffness_scale_front]
-      metrics: [max_abs_sideslip_rad, ...]
+      metrics: [max_abs_sideslip_rad, ...]   # numeric result columns (checked)
       worst: {metric: max_abs_sideslip_rad, count: 20}
     spin_sideslip_rad: 0.349      # optional: |sideslip| above which a run has spun
     block_size: 8                 # optional: points per task

@@ -510,6 +510,29 @@ def test_study_file_not_utf8_is_one_line(tmp_path, capsys, data, needle):
     _study_refused(tmp_path, capsys, path, needle)
 
 
+@pytest.mark.parametrize("report, field", [
+    ({"metrics": ["max_abs_sideslip_rad", "iso7401.yaw_rate_radps.overshot_fraction"]},
+     "report.metrics"),
+    ({"worst": {"metric": "sideslip"}}, "report.worst.metric"),
+    ({"metrics": ["status"]}, "report.metrics"),
+], ids=["misspelt", "worst", "not_numeric"])
+def test_unknown_report_metric_is_refused_listing_the_valid_names(tmp_path, capsys, report,
+                                                                  field):
+    """A report metric that is no numeric column of the study's results (a misspelt one, a
+    string column) drew nothing without a word; it is refused, listing every numeric
+    column (the float, integer and boolean columns of fourws_study.point.columns)."""
+    from fourws_study.point import columns
+
+    path = _write(tmp_path, "bad", {"scenario": _scenario(), "report": report})
+    bad = (report.get("metrics") or [report["worst"]["metric"]])[-1]
+    line = _study_refused(tmp_path, capsys, path,
+                          f"{field}: {bad!r} is not a numeric result column (valid: ")
+    ok = _study(tmp_path, "ok", scenario=_scenario())
+    numeric = [n for n, kind in columns(ok) if kind in ("float64", "int64", "bool")]
+    assert f"(valid: {', '.join(numeric)}) in {path}" in line
+    assert "iso7401.yaw_rate_radps.overshoot_fraction" in numeric and "status" not in numeric
+
+
 # ------------------------------------------------------------------ metrics
 
 def test_lane_change_clearance_of_straight_paths():
