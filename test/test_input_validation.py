@@ -206,6 +206,45 @@ def test_wrong_type_is_one_line(tmp_path, key, value):
     _refused(load_vehicle, _write(tmp_path, data), key)
 
 
+TOOLS_WITH_A_VEHICLE = [
+    ("linear", "--model", "3dof", "--law", "sol1", "--speed-kmh", "85"),
+    ("handling", "--law", "sol1"),
+    ("lqr-gains", "--model", "2dof"),
+    ("equilibria", "--speed-mps", "20"),
+    ("tire-curves",),
+]
+
+
+@pytest.mark.parametrize("group, key, valid", [
+    ("sti", "bogus_key", "(valid: a0, a1, a2, a3, a4, b1, b3, b4, c1, c2, c3, c4, cs_per_fz, "
+                         "fzt_lb, g1, g2, k1, ka, kmu, snt, tp_psi, tw_in)"),
+    ("magic_formula", "PKY9", "(valid: FNOMIN, R0, "),
+], ids=["sti", "magic_formula"])
+def test_unknown_tire_coefficient_is_refused_by_every_tool(tmp_path, capsys, group, key,
+                                                           valid):
+    """An unknown key of the vehicle's tire coefficients (a typo the tire would have run
+    without) was accepted by ``fourws linear`` and ``handling`` and refused by ``fourws run``
+    only once its simulator node started, with exit code 1: the vehicle loader refuses it,
+    so every tool (and a scenario naming the vehicle) ends with exit code 2 and the same one
+    line naming the key, the valid names (Table C.1's 22 STI coefficients) and the file."""
+    from fourws_sim.tires import sti
+
+    assert len(sti.TABLE_C1) == 22
+    data = _vehicle("table_8_1")
+    data["tire"].setdefault(group, {})[key] = 1.0
+    path = _write(tmp_path, data, "bad_tire.yaml")
+    _refused(load_vehicle, path, f"tire.{group}.{key}", valid)
+    scenario = _write(tmp_path, {**yaml.safe_load((SHIPPED / "scenarios" / "default.yaml")
+                                                  .read_text()), "vehicle": str(path)},
+                      "scenario.yaml")
+    for command, *rest in [*TOOLS_WITH_A_VEHICLE, ("run",)]:
+        argv = [command, str(scenario), "--out", str(tmp_path / "runs")] \
+            if command == "run" else [command, "--vehicle", str(path), *rest]
+        code, err = _cli(capsys, *argv)
+        _one_line_error(code, err, command, f"tire.{group}.{key}: unknown", valid, str(path))
+    assert not (tmp_path / "runs").exists()
+
+
 # ---------------------------------------------------------------- plausibility: vehicles
 
 ABSURD_VEHICLE = [  # issue 9's list
