@@ -565,6 +565,79 @@ def test_node_params_file_missing_binary_or_duplicate(tmp_path):
         assert len(ours) == 1 and str(path) in ours[0] and needle in ours[0], ours
 
 
+PARAMS = SHIPPED / "params" / "lockstep.yaml"
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_node_params_file_unknown_parameter_empty_or_without_section(tmp_path):
+    """rclpy ignores a file's parameters a node does not declare, and starts a node on an
+    empty file or one with no section for it: the simulator ran on with defaults. Each is
+    exit 2 and one error line naming the parameter (or the sections) and the file; other
+    nodes' sections of a shared file are not the simulator's business (the shipped file
+    holds four, and the misspelt key below sits in the simulator's own)."""
+    text = PARAMS.read_text()
+    assert text.count("    integrator: rk4\n") == 1
+    typo = _write(tmp_path, text.replace("    integrator: rk4\n", "    integrater: rk4\n"),
+                  "typo.yaml")
+    empty = _write(tmp_path, "# nothing here\n", "empty.yaml")
+    other = _write(tmp_path, "fourws_controller:\n  ros__parameters:\n    law: fws\n"
+                             "/**/fourws_maneuver:\n  ros__parameters:\n    vehicle: x\n",
+                   "other.yaml")
+    for path, needle in (
+            (typo, "integrater: not a parameter of node /fourws_simulator (under "
+                   "'fourws_simulator'; valid: autostart, clock_mode, "),
+            (empty, "<file>: is empty or not a ROS 2 parameter file"),
+            (other, "<file>: has no section for node /fourws_simulator (its sections: "
+                    "fourws_controller, /**/fourws_maneuver; /** is read by every node)")):
+        res = _node("simulator", "--params-file", str(path))
+        ours = [line for line in res.stderr.splitlines() if line.startswith("[fourws_")]
+        assert res.returncode == 2, res.stderr
+        assert "Traceback" not in res.stderr
+        assert len(ours) == 1 and ours[0].startswith("[fourws_simulator] error: ") \
+            and needle in ours[0] and ours[0].endswith(f" in {path}"), ours
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_node_params_file_wildcard_sections_still_work(tmp_path):
+    """The sections rcl applies by wildcard (``/**`` every node, ``/**/NAME`` a node in any
+    namespace) are this node's: the controller's shipped parameters under either start it
+    (as does the shipped file, whose other sections belong to the other nodes)."""
+    from config_mutation import classify_node
+
+    own = yaml.safe_load(PARAMS.read_text())["fourws_controller"]
+    for key in ("/**", "/**/fourws_controller"):
+        path = _write(tmp_path, {key: own}, "wildcard.yaml")
+        assert classify_node("controller", path, dict(os.environ), 60.0) == ("ok", ""), key
+    assert classify_node("controller", PARAMS, dict(os.environ), 60.0) == ("ok", "")
+    typo = _write(tmp_path, {"/**": {"ros__parameters": {**own["ros__parameters"],
+                                                         "belief_scale_frnt": 1.0}}},
+                  "wildcard_typo.yaml")
+    res = _node("controller", "--params-file", str(typo))
+    ours = [line for line in res.stderr.splitlines() if line.startswith("[fourws_")]
+    assert res.returncode == 2 and len(ours) == 1, res.stderr
+    assert "belief_scale_frnt: not a parameter of node /fourws_controller (under '/**'; " \
+        "valid: " in ours[0], ours
+
+
+@pytest.mark.parametrize("section, node, applies", [
+    ("/**", "/fourws_simulator", True), ("/**", "/ns/deep/fourws_simulator", True),
+    ("fourws_simulator", "/fourws_simulator", True),
+    ("/fourws_simulator", "/fourws_simulator", True),
+    ("/**/fourws_simulator", "/ns/fourws_simulator", True),
+    ("/**/fourws_simulator", "/fourws_simulator", True),
+    ("/*", "/fourws_simulator", True), ("/*", "/ns/fourws_simulator", False),
+    ("/ns/*", "/ns/fourws_simulator", True), ("fourws_simulator", "/ns/fourws_simulator", False),
+    ("fourws_controller", "/fourws_simulator", False), ("/fourws", "/fourws_simulator", False),
+])
+def test_params_file_sections_match_as_rcl_matches_them(section, node, applies):
+    """ROS 2 design article "ROS command line arguments": ``*`` matches one token between
+    slashes, ``**`` zero or more, no partial matches; a name without a leading slash is from
+    the root namespace."""
+    from fourws_ros.runtime import _section_matches
+
+    assert _section_matches(section, node) is applies
+
+
 @pytest.mark.usefixtures("ros_domain")
 def test_live_belief_vehicle_binary_or_utf16_is_rejected(tmp_path):
     """A live ``belief_vehicle`` naming a binary or UTF-16 file is refused by the controller's
