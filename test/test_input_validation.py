@@ -493,6 +493,82 @@ def test_resampling_step_bounds(small_bag, where, factor, ok):
             B.resample(run, dt)
 
 
+_WRITER = """
+import signal, sys
+from fourws_analysis import bag as B
+store = B.typestore()
+mt = B.TOPIC_TYPES[B.TOPIC_STATE]
+writer = B.BagWriter(sys.argv[1]).open()
+for i in range(50):
+    msg = B.make_message(mt, header={"stamp": B.stamp(0.01 * i)}, step=i, model="2dof")
+    writer.write_raw(B.TOPIC_STATE, store.serialize_cdr(msg, mt), 10_000_000 * i)
+writer.flush()
+print("recording", flush=True)
+sys.stdin.readline()
+writer.close()
+print("closed", flush=True)
+sys.stdin.readline()
+"""
+
+
+def _writer_process(bag: Path) -> subprocess.Popen:
+    proc = subprocess.Popen([sys.executable, "-c", _WRITER, str(bag)], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline() == "recording\n"
+    return proc
+
+
+def test_bag_being_recorded_is_not_repaired_or_verified(capsys, tmp_path):
+    """A bag whose writer is alive (it holds the flock of the bag's lock file): ``fourws bag
+    repair`` rewrote its file under the writer, it now refuses, as ``verify`` does, exit 2
+    and one line naming the bag and the writer's process; the file is untouched. Once the
+    writer closed the bag, its lock file is gone and verify reads it (50 states)."""
+    from fourws_run.bagfile import LOCK_FILE
+
+    bag = tmp_path / "live"
+    proc = _writer_process(bag)
+    try:
+        mcap = bag / "live.mcap"
+        before = mcap.read_bytes()
+        for action in ("repair", "verify"):
+            code, err = _cli(capsys, "bag", action, str(bag))
+            _one_line_error(code, err, "bag", f"bag {str(bag)!r} is being recorded (process "
+                            f"{proc.pid} holds {LOCK_FILE}); wait until its recording has "
+                            "ended")
+        assert mcap.read_bytes() == before and sorted(p.name for p in bag.iterdir()) == [
+            LOCK_FILE, "live.mcap"]
+        proc.stdin.write("\n")
+        proc.stdin.flush()
+        assert proc.stdout.readline() == "closed\n"
+        assert not (bag / LOCK_FILE).exists()
+        code = main(["bag", "verify", str(bag)])
+        out = capsys.readouterr().out
+        assert code == 1, out  # the verdict on a bag that carries no recording accounting
+        assert out == f"{bag}: readable, checksums ok, completeness unknown (the bag " \
+            "carries no recording accounting)\n", out
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+def test_bag_of_a_killed_writer_is_repaired_and_loses_its_stale_lock(capsys, tmp_path):
+    """SIGKILL releases the writer's flock (the kernel closes its files): the lock file left
+    in the folder does not stop ``repair``, which recovers the 50 flushed states and removes
+    it."""
+    from fourws_run.bagfile import LOCK_FILE
+
+    bag = tmp_path / "killed"
+    proc = _writer_process(bag)
+    proc.kill()
+    proc.wait()
+    assert (bag / LOCK_FILE).exists()
+    code = main(["bag", "repair", str(bag)])
+    out = capsys.readouterr().out
+    assert code == 1, out  # repaired: a bag without final status counts is incomplete
+    assert f"{bag}: repaired; recovered 50 messages (/fourws/state 50)" in out, out
+    assert not (bag / LOCK_FILE).exists()
+
+
 @pytest.mark.parametrize("dt", ["1e-9", "1e6", "nan", "-1"])
 def test_analyze_dt_bounds_one_line(capsys, small_bag, dt):
     code, err = _cli(capsys, "analyze", str(small_bag), "--quiet", "--no-sweep", f"--dt={dt}")
