@@ -129,6 +129,7 @@ def _report(root: Path) -> int:
 
 
 def _rerun(args: argparse.Namespace, root: Path) -> int:
+    from fourws_ros.domains import domain_for_run  # fourws_ros: not for --help
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
     from fourws_run.record import Outcome  # rosbags, mcap: not for --help
     from fourws_study.kernel import DURATION  # numba, pyarrow: not for --help
@@ -144,6 +145,7 @@ def _rerun(args: argparse.Namespace, root: Path) -> int:
     except FourwsError:
         row = None
     out = args.out if args.out is not None else root / "reruns"
+    domain_for_run().release()  # a bad ROS_DOMAIN_ID is exit 2 before the run folder
     record = run_graph(config, out, run_name=f"point-{args.point}", overwrite=True)
     print("\n".join(record.summary_lines()), flush=True)
     if record.bag_path is None or record.outcome not in (Outcome.COMPLETED, Outcome.ABORTED,

@@ -616,6 +616,31 @@ def test_report_folder_unwritable_one_line(capsys, small_bag, tmp_path):
     _one_line_error(code, err, "analyze", "Not a directory")
 
 
+@pytest.mark.parametrize("domain, needle", [
+    ("300", "ROS_DOMAIN_ID='300' is not a ROS domain ID (0..232)"),
+    ("-1", "ROS_DOMAIN_ID='-1' is not a ROS domain ID (0..232)"),
+    ("busy", "(from ROS_DOMAIN_ID) is used by another fourws run on this machine"),
+], ids=["300", "negative", "busy"])
+@pytest.mark.parametrize("command", ["run", "demo"])
+def test_unusable_ros_domain_is_bad_input_before_anything_is_created(
+        capsys, monkeypatch, tmp_path, domain, needle, command):
+    """``ROS_DOMAIN_ID=300`` (above ROS 2's 232 on Linux) left a FAILED run folder and exit
+    code 1: the environment is checked as domain_for_run checks it (the same function),
+    before the output folder exists; a domain another fourws run holds (here this test's
+    own lease) likewise."""
+    from fourws_ros.domains import reserve_domain_id
+
+    lease = reserve_domain_id() if domain == "busy" else None
+    try:
+        monkeypatch.setenv("ROS_DOMAIN_ID", str(lease.domain_id) if lease else domain)
+        code, err = _cli(capsys, command, "--out", str(tmp_path / "runs"))
+    finally:
+        if lease is not None:
+            lease.release()
+    _one_line_error(code, err, command, needle)
+    assert not (tmp_path / "runs").exists()
+
+
 # ---------------------------------------------------------------------------------- nodes
 
 def _node(name: str, *ros_args: str) -> subprocess.CompletedProcess:
