@@ -90,6 +90,10 @@ def run(args: argparse.Namespace) -> int:
         for law in laws:
             if law not in available_laws():
                 raise UnknownNameError("law", law, available_laws())
+        for law in laws:
+            if laws.count(law) > 1:  # it would run (and be recorded) as often
+                raise ParameterError("--law", f"{law!r} is given {laws.count(law)} times; "
+                                     "each law runs once")
     out = args.out if args.out is not None else Path(scenario.recording.output_dir)
     # the environment is input too: a ROS_DOMAIN_ID no run can use (not a domain ID, or held
     # by another fourws run) is exit 2 before any run folder exists (run_graph leases it)

@@ -641,6 +641,21 @@ def test_unusable_ros_domain_is_bad_input_before_anything_is_created(
     assert not (tmp_path / "runs").exists()
 
 
+def test_a_law_given_twice_is_refused(capsys, tmp_path):
+    """``--law fws --law fws`` ran fws twice (two run folders of one law), and so did a
+    scenario listing it twice: one line each, exit 2, before anything runs."""
+    code, err = _cli(capsys, "run", "--law", "fws", "--law", "sol1", "--law", "fws", "--out",
+                     str(tmp_path / "runs"))
+    _one_line_error(code, err, "run", "--law: 'fws' is given 2 times; each law runs once")
+    data = yaml.safe_load((SHIPPED / "scenarios" / "default.yaml").read_text())
+    data["laws"] = ["sol1", "sol1", "fws", "sol1"]
+    path = _write(tmp_path, data, "twice.yaml")
+    _refused(load_scenario, path, "laws", "'sol1' is listed 3 times; each law runs once")
+    code, err = _cli(capsys, "run", str(path), "--out", str(tmp_path / "runs"))
+    _one_line_error(code, err, "run", "laws: 'sol1' is listed 3 times", str(path))
+    assert not (tmp_path / "runs").exists()
+
+
 # ---------------------------------------------------------------------------------- nodes
 
 def _node(name: str, *ros_args: str) -> subprocess.CompletedProcess:
