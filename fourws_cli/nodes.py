@@ -26,6 +26,9 @@ import signal
 import sys
 import types
 
+#: One line for ``fourws --help``.
+HELP = "run one node of the graph in this process: fourws node NAME --ros-args ..."
+
 #: Node name -> module with a ``main(args) -> int``.
 NODES: dict[str, str] = {
     "simulator": "fourws_ros.simulator_node",
