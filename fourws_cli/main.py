@@ -82,7 +82,7 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=getattr(mod, "HELP", ""),
                            description=getattr(mod, "HELP", ""))
         mod.add_arguments(p)
-        p.set_defaults(_run=mod.run)
+        p.set_defaults(_run=mod.run, _parser=p)
     return parser
 
 
@@ -98,7 +98,11 @@ def main(argv: list[str] | None = None) -> int:
             argv[:1] == ["bench"] and "--study" in argv):
         use_wide_vectors()
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        # argparse blames the top level for a subcommand's unknown option (and prints the
+        # top-level usage); the subcommand's own usage is the helpful one
+        getattr(args, "_parser", parser).error(f"unrecognized arguments: {' '.join(extra)}")
     if not getattr(args, "_run", None):
         parser.print_help()
         return 1
