@@ -335,8 +335,10 @@ def _flipped(path: Path, offset: int) -> None:
 def test_a_flipped_byte_in_a_block_is_an_error_never_another_number(small_study, tmp_path):
     """Every 97th byte of a block file flipped in turn (about 300 files): reading the study
     either gives exactly the original table (a byte Parquet does not use) or refuses in one
-    line naming the file and the --resume that recomputes it; no flip gives other numbers
-    (without page checksums and the schema check 39 of 312 flips did, measured)."""
+    line naming the file and the --resume that recomputes it; no flip gives other numbers.
+    Measured on a block of 30 946 bytes: 39 of its 312 sampled flips gave other rows with
+    plain Parquet; flipping every byte, 3 did with page checksums and the schema check
+    alone (page headers), none with the rows' digest."""
     _, study, serial = small_study
     out = tmp_path / "flip"
     shutil.copytree(serial, out)
