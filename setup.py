@@ -40,6 +40,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": ["fourws = fourws_cli.main:main"]
-        + [f"fourws-{name} = {module}:main" for name, module in NODES.items()],
+        # through fourws_cli.nodes, which handles a stop while the node is still importing
+        + [f"fourws-{name} = fourws_cli.nodes:entry.{name}" for name in NODES],
     },
 )

@@ -32,7 +32,15 @@ moments; double SIGINT to the launcher; rogue publishers on the run's domain (Na
 states at t = 1e6 s, future-stamped commands, 100 rad driver inputs, ``done`` statuses, floods,
 a node answering every state); realtime runs whose maneuver node is stopped; a full and a
 read-only output disk (tmpfs; skipped where mounting is not permitted); a few absurd but
-well-formed scenario values.
+well-formed scenario values; and the tools beside the graph (:func:`tool_attempts`): study
+files with a duplicate key, in Latin-1, with an unknown report metric, damaged or stray block
+files; a vehicle with an unknown tire coefficient in ``linear``, ``handling`` and ``run``;
+node parameter files with an unknown parameter or empty; a node stopped while it imports;
+``bag repair``/``verify`` of a bag still being recorded; ``ROS_DOMAIN_ID=300``; a law given
+twice; ``--help``, ``--version``, the summary of ``analyze``, a subcommand's unknown option.
+There an input that must be refused is *clear error* when the command exits with code 2 and
+one error line naming the cause (and the file), *silent wrong* when it is accepted, *unclear*
+otherwise; a command that must work is *correct* or *silent wrong*.
 
 Usage (a pass takes 15-30 min on two loaded cores)::
 
@@ -1133,7 +1141,368 @@ def run_pass(work: Work, only: str | None, trials: int) -> list[Result]:
     for scen in ("absurd_amplitude", "absurd_duration", "absurd_speed", "absurd_step"):
         at.single(scen.replace("_", " "), "absurd input", Expect(scen, absurd=True),
                   timeout_s=90.0)
+
+    # the tools beside the graph
+    tool_attempts(at)
     return at.results
+
+
+# ---------------------------------------------------------------------------------------------
+# the tools beside the graph: files, command lines, environment (issue 20, points 6-8)
+
+#: A one-point study of the 8-DOF closed loop (1 s of simulated time): the base of the study
+#: file attempts.
+STUDY = """name: adv
+scenario:
+  name: adv
+  vehicle: table_8_1
+  model: 8dof
+  laws: [fws]
+  maneuver: {name: s, type: step_steer, initial_speed_mps: 20.0, duration_s: 1.0,
+             amplitude_rad: 0.02, start_s: 0.2, ramp_time_s: 0.1}
+block_size: 1
+"""
+#: A bag writer kept open (a recording in progress) until its stdin is closed.
+LIVE_BAG_CODE = r"""
+import sys
+from fourws_analysis import bag as B
+store = B.typestore()
+mt = B.TOPIC_TYPES[B.TOPIC_STATE]
+writer = B.BagWriter(sys.argv[1]).open()
+for i in range(50):
+    msg = B.make_message(mt, header={"stamp": B.stamp(0.01 * i)}, step=i, model="2dof")
+    writer.write_raw(B.TOPIC_STATE, store.serialize_cdr(msg, mt), 10_000_000 * i)
+writer.flush()
+print("recording", flush=True)
+sys.stdin.read()
+writer.close()
+"""
+#: Byte offset of the last byte of one data column of a Parquet block (inside a data page).
+DATA_PAGE_CODE = r"""
+import sys
+import pyarrow.parquet as pq
+meta = pq.ParquetFile(sys.argv[1]).metadata.row_group(0)
+col = next(meta.column(i) for i in range(meta.num_columns)
+           if meta.column(i).path_in_schema == "max_abs_sideslip_rad")
+print(col.data_page_offset + col.total_compressed_size - 1)
+"""
+SHIPPED_CODE = "from fourws_sim.params import CONFIG_DIR; print(CONFIG_DIR)"
+
+
+@dataclasses.dataclass
+class Finished:
+    """A command of a tool attempt, finished (or killed at its time limit)."""
+
+    rc: int | None
+    stdout: str
+    stderr: str
+    wall_s: float
+    timed_out: bool
+
+
+def run_command(argv: list[str], cwd: Path, env: dict[str, str] | None = None,
+                timeout_s: float = 300.0, stdin: str | None = None) -> Finished:
+    t0 = time.monotonic()
+    proc = subprocess.Popen(argv, cwd=cwd, env=env or base_env(), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, stdin=subprocess.PIPE, text=True,
+                            errors="replace", start_new_session=True)
+    try:
+        out, err = proc.communicate(stdin, timeout=timeout_s)
+        timed_out = False
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, err = proc.communicate()
+        timed_out = True
+    return Finished(proc.returncode, out, err, time.monotonic() - t0, timed_out)
+
+
+def refusal(done: Finished, prefix: str, needles: tuple[str, ...],
+            code: int = 2) -> tuple[str, str, list[str]]:
+    """(verdict, error line, notes) of a command that must refuse its input: exit ``code``
+    and one line starting with ``prefix`` that holds every needle."""
+    ours = [line for line in done.stderr.splitlines() if line.startswith(prefix)]
+    error = ours[-1] if ours else ""
+    if done.timed_out:
+        return "hang", error, ["no exit within its time limit (killed): the input was taken"]
+    if "Traceback" in done.stdout + done.stderr:
+        tail = [line for line in done.stderr.splitlines() if line.strip()]
+        return "traceback", error, [f"last line: {tail[-1][:200] if tail else ''}"]
+    if done.rc == 0:
+        return "silent wrong", error, ["exit 0: the input was accepted"]
+    missing = [n for n in needles if n not in error]
+    if done.rc != code or len(ours) != 1 or missing:
+        notes = [f"exit {done.rc} (want {code}), {len(ours)} line(s) starting "
+                 f"{prefix!r}"] + ([f"the error lacks {missing}"] if missing else [])
+        return "unclear", error, notes
+    return "clear error", error, []
+
+
+def tool_attempts(at: "Attempts") -> None:
+    """The tool attempts of a pass (module docstring)."""
+    inst, work = at.work.inst, at.work
+    fourws = str(inst.fourws)
+    config = Path(run_command([str(inst.python), "-c", SHIPPED_CODE], work.root).stdout
+                  .strip() or ".")
+
+    def case(name: str, group: str, how: str,
+             body: Callable[[Path], tuple[str, str, list[str], Finished | None]]) -> None:
+        if not at.wanted(name):
+            return
+        adir = work.attempt_dir(name)
+        try:
+            verdict, error, notes, done = body(adir)
+        except Exception as exc:  # the harness's own bug must not end a 30 min pass
+            print(f"  {name:58s} HARNESS ERROR {type(exc).__name__}: {exc}", flush=True)
+            return
+        at.record(Result(name, group, verdict, done.rc if done else None,
+                         round(done.wall_s, 1) if done else 0.0, error, notes,
+                         reproduce=how, run_dir=str(adir)))
+
+    def refuse(argv: list[str], needles: Callable[[Path], tuple[str, ...]], prefix: str,
+               setup: Callable[[Path], None] | None = None, env: dict[str, str] | None = None,
+               absent: str = "", code: int = 2, timeout_s: float = 300.0):
+        def body(adir: Path):
+            if setup is not None:
+                setup(adir)
+            done = run_command([a.replace("{A}", str(adir)) for a in argv], adir, env,
+                               timeout_s)
+            verdict, error, notes = refusal(done, prefix, needles(adir), code)
+            if absent and (adir / absent).exists() and verdict == "clear error":
+                verdict, notes = "unclear", [f"{absent} was created before the refusal"]
+            return verdict, error, notes, done
+        return body
+
+    def study_file(text: str, name: str = "study.yaml", data: bytes | None = None):
+        def setup(adir: Path) -> None:
+            path = adir / name
+            if data is not None:
+                path.write_bytes(data)
+            else:
+                path.write_text(text)
+        return setup
+
+    # study files (point 6)
+    twice = STUDY.replace("block_size: 1\n", "block_size: 1\nblock_size: 2\n")
+    case("study file with a duplicate key", "study files",
+         f"{fourws} study S --out D --no-report  # S: block_size twice",
+         refuse([fourws, "study", "{A}/study.yaml", "--out", "{A}/out", "--no-report"],
+                lambda a: (str(a / "study.yaml"), "duplicate key"), "fourws study: error:",
+                setup=study_file(twice), absent="out"))
+    latin1 = STUDY.replace("name: adv\n", "name: adv\ndescription: f\u00fcr\n", 1)
+    case("study file in Latin-1", "study files",
+         f"{fourws} study S --out D --no-report  # S: Latin-1 text",
+         refuse([fourws, "study", "{A}/study.yaml", "--out", "{A}/out", "--no-report"],
+                lambda a: (str(a / "study.yaml"), "UTF-8"), "fourws study: error:",
+                setup=study_file("", data=latin1.encode("latin-1")), absent="out"))
+    metric = STUDY + "report: {metrics: [no_such_metric]}\n"
+    case("study with an unknown report metric", "study files",
+         f"{fourws} study S --out D --no-report  # S: report.metrics [no_such_metric]",
+         refuse([fourws, "study", "{A}/study.yaml", "--out", "{A}/out", "--no-report"],
+                lambda a: ("no_such_metric", "valid: "), "fourws study: error:",
+                setup=study_file(metric), absent="out", timeout_s=600.0))
+
+    finished: dict[str, Path] = {}
+
+    def finished_study(adir: Path) -> Path:
+        """A copy of a finished study folder (the study runs once per pass)."""
+        if "dir" not in finished:
+            base = work.root / "study-finished"
+            shutil.rmtree(base, ignore_errors=True)
+            base.mkdir()
+            (base / "study.yaml").write_text(STUDY)
+            done = run_command([fourws, "study", str(base / "study.yaml"), "--out",
+                                str(base / "out"), "--no-report"], base, timeout_s=900.0)
+            if done.rc != 0:
+                raise RuntimeError(f"the base study failed: {done.stderr[-300:]}")
+            finished["dir"] = base
+        shutil.copytree(finished["dir"], adir / "s", dirs_exist_ok=True)
+        return adir / "s"
+
+    def stray(adir: Path):
+        root = finished_study(adir)
+        block = root / "out" / "blocks" / "block-000000.parquet"
+        shutil.copy(block, block.with_name("block-000099.parquet"))
+        done = run_command([fourws, "study", str(root / "study.yaml"), "--out",
+                            str(root / "out"), "--resume", "--no-report"], adir)
+        verdict, error, notes = refusal(done, "fourws study: error:",
+                                        (str(block.with_name("block-000099.parquet")),))
+        return verdict, error, notes, done
+    case("study --resume with a stray block file", "study files",
+         f"{fourws} study S --out D --resume  # D/blocks/block-000099.parquet a stray copy",
+         stray)
+
+    def flipped(adir: Path):
+        root = finished_study(adir)
+        block = root / "out" / "blocks" / "block-000000.parquet"
+        where = run_command([str(inst.python), "-c", DATA_PAGE_CODE, str(block)], adir)
+        data = bytearray(block.read_bytes())
+        data[int(where.stdout.strip())] ^= 0x10
+        block.write_bytes(bytes(data))
+        done = run_command([fourws, "study", "report", str(root / "out")], adir)
+        verdict, error, notes = refusal(done, "fourws study: error:", (str(block),))
+        if verdict == "clear error":
+            again = run_command([fourws, "study", str(root / "study.yaml"), "--out",
+                                 str(root / "out"), "--resume", "--no-report"], adir,
+                                timeout_s=600.0)
+            if again.rc != 0:
+                verdict = "unclear"
+                notes.append(f"--resume did not recompute the damaged block (exit {again.rc})")
+        return verdict, error, notes, done
+    case("study report with a flipped byte in a block", "study files",
+         f"{fourws} study report D  # a byte of a data page of block 0 flipped; then "
+         "--resume", flipped)
+
+    # a vehicle with an unknown tire coefficient, in every tool (point 6)
+    def bad_vehicle(adir: Path) -> None:
+        text = (config / "vehicles" / "table_8_1.yaml").read_text()
+        text = re.sub(r"^(  sti:.*)$", r"\1\n    bogus_key: 1.0", text, count=1, flags=re.M)
+        (adir / "vehicle.yaml").write_text(text)
+        (adir / "scenario.yaml").write_text(SCENARIOS["short"][0].replace(
+            "vehicle: table_8_1", f"vehicle: {adir / 'vehicle.yaml'}"))
+    for tool, argv in (("linear", ["--vehicle", "{A}/vehicle.yaml", "--model", "3dof",
+                                   "--law", "sol1", "--speed-kmh", "85"]),
+                       ("handling", ["--vehicle", "{A}/vehicle.yaml", "--law", "sol1"]),
+                       ("run", ["{A}/scenario.yaml", "--law", LAW, "--out", "{A}/runs"])):
+        case(f"unknown tire coefficient, fourws {tool}", "vehicle files",
+             f"{fourws} {tool} ... # the vehicle's tire.sti has bogus_key",
+             refuse([fourws, tool, *argv], lambda a: ("bogus_key", str(a / "vehicle.yaml")),
+                    f"fourws {tool}: error:", setup=bad_vehicle, timeout_s=HANG_S))
+
+    # node parameter files (point 6); the node runs on its own domain
+    def node_env() -> dict[str, str]:
+        return {**base_env(), "ROS_DOMAIN_ID": str(free_domain())}
+
+    def typo_params(adir: Path) -> None:
+        text = (config / "params" / "lockstep.yaml").read_text()
+        (adir / "params.yaml").write_text(text.replace("    integrator: rk4",
+                                                       "    integrater: rk4", 1))
+    for what, setup, needle in (
+            ("an unknown parameter", typo_params, "integrater"),
+            ("empty", lambda a: (a / "params.yaml").write_text("# empty\n"), "empty")):
+        case(f"simulator params file with {what}", "node parameters",
+             f"{fourws} node simulator --ros-args --params-file P  # P {what}",
+             refuse([fourws, "node", "simulator", "--ros-args", "--params-file",
+                     "{A}/params.yaml"], lambda a, n=needle: (n, str(a / "params.yaml")),
+                    "[fourws_simulator] error:", setup=setup, env=node_env(), timeout_s=90.0))
+
+    # a node stopped while it is still importing (point 6)
+    def stopped_importing(adir: Path):
+        proc = subprocess.Popen([fourws, "node", "simulator", "--ros-args", "--params-file",
+                                 str(config / "params" / "lockstep.yaml")], cwd=adir,
+                                env=node_env(), stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True, errors="replace",
+                                start_new_session=True)
+        t0 = time.monotonic()
+        sent = False
+        while proc.poll() is None and time.monotonic() - t0 < 60.0:
+            if "_rclpy_pybind11" in _proc_text(proc.pid, "maps"):
+                os.kill(proc.pid, signal.SIGINT)
+                sent = True
+                break
+            time.sleep(0.001)
+        try:
+            out, err = proc.communicate(timeout=60.0)
+            timed_out = False
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            out, err = proc.communicate()
+            timed_out = True
+        done = Finished(proc.returncode, out, err, time.monotonic() - t0, timed_out)
+        if not sent:
+            return "unclear", "", ["rclpy was never mapped: no SIGINT sent"], done
+        if timed_out:
+            return "hang", "", ["the node did not end after SIGINT"], done
+        if "Traceback" in out + err or "KeyboardInterrupt" in out + err:
+            return "traceback", "", ["a KeyboardInterrupt traceback in the node's log"], done
+        if proc.returncode != 0:
+            return "unclear", "", [f"exit {proc.returncode} (a stop is exit 0)"], done
+        return "correct", "", [], done
+    case("SIGINT to a node while it imports rclpy", "nodes",
+         f"{fourws} node simulator ...; SIGINT once /proc/PID/maps holds _rclpy_pybind11",
+         stopped_importing)
+
+    # a bag still being recorded (point 6)
+    def live_bag(adir: Path):
+        bag = adir / "live"
+        writer = subprocess.Popen([str(inst.python), "-c", LIVE_BAG_CODE, str(bag)],
+                                  cwd=adir, env=base_env(), stdin=subprocess.PIPE,
+                                  stdout=subprocess.PIPE, text=True)
+        try:
+            if writer.stdout.readline().strip() != "recording":
+                raise RuntimeError("the bag writer did not start")
+            mcap = next(bag.glob("*.mcap"))
+            before = mcap.read_bytes()
+            done = run_command([fourws, "bag", "repair", str(bag)], adir, timeout_s=120.0)
+            verdict, error, notes = refusal(done, "fourws bag: error:",
+                                            (str(bag), "being recorded"))
+            rewritten = list(bag.glob("*.damaged")) or not mcap.is_file() \
+                or mcap.read_bytes() != before
+            if rewritten:
+                notes.append("the live bag's file was rewritten under its writer")
+                if verdict in ("unclear", "clear error"):
+                    verdict = "silent wrong"
+        finally:
+            writer.kill()
+            writer.wait()
+        return verdict, error, notes, done
+    case("bag repair of a bag being recorded", "bags",
+         f"{fourws} bag repair B  # while another process writes B", live_bag)
+
+    # the environment and the command line (point 7)
+    case("ROS_DOMAIN_ID=300", "environment", f"ROS_DOMAIN_ID=300 {fourws} run S --out D",
+         refuse([fourws, "run", str(work.scenarios["short"]), "--law", LAW, "--out",
+                 "{A}/runs"], lambda a: ("ROS_DOMAIN_ID",), "fourws run: error:",
+                env={**base_env(), "ROS_DOMAIN_ID": "300"}, absent="runs",
+                timeout_s=HANG_S))
+    case("a law given twice", "command line", f"{fourws} run S --law fws --law fws --out D",
+         refuse([fourws, "run", str(work.scenarios["short"]), "--law", "fws", "--law", "fws",
+                 "--out", "{A}/runs"], lambda a: ("fws", "--law"), "fourws run: error:",
+                absent="runs", timeout_s=2 * HANG_S))
+    case("unknown option of a subcommand", "command line",
+         f"{fourws} handling --vehicle table_4_4 --law sol1 --speed-kmh 85",
+         refuse([fourws, "handling", "--vehicle", "table_4_4", "--law", "sol1", "--speed-kmh",
+                 "85"], lambda a: ("unrecognized arguments: --speed-kmh 85",),
+                "fourws handling: error:", timeout_s=60.0))
+
+    def helps(adir: Path):
+        done = run_command([fourws, "--help"], adir, timeout_s=60.0)
+        version = run_command([fourws, "--version"], adir, timeout_s=60.0)
+        notes = []
+        if "Entry point" in done.stdout:
+            notes.append("--help shows a module docstring as its description")
+        if not re.search(r"^ {4}node\b", done.stdout, re.M):
+            notes.append("--help does not list `node`")
+        if version.rc != 0 or not re.match(r"^fourws \S+$", version.stdout.strip()):
+            notes.append(f"--version: exit {version.rc}, {version.stdout.strip()[:60]!r}")
+        return ("silent wrong" if notes else "correct"), "", notes, done
+    case("--help and --version", "command line", f"{fourws} --help; {fourws} --version", helps)
+
+    def summary(adir: Path):
+        run_command([fourws, "run", str(work.scenarios["short"]), "--law", LAW, "--out",
+                     str(adir / "runs")], adir, timeout_s=HANG_S)
+        bag = find_bag(adir / "runs")
+        if bag is None:
+            raise RuntimeError("the run for the analysis recorded no bag")
+        as_json = run_command([fourws, "analyze", str(bag), "--json", "--no-sweep",
+                               "--quiet"], adir, timeout_s=300.0)
+        done = run_command([fourws, "analyze", str(bag), "--no-sweep", "--quiet"], adir,
+                           timeout_s=300.0)
+        group = next(iter(json.loads(as_json.stdout)["runs"].values()))["iso7401_step"]
+        leaves = []
+
+        def walk(value: Any, prefix: str) -> None:
+            if isinstance(value, dict):
+                for key, item in value.items():
+                    walk(item, f"{prefix}{key}.")
+            elif isinstance(value, float):
+                leaves.append(prefix[:-1].rsplit(".", 1)[-1])
+        walk(group, "")
+        missing = [key for key in leaves if key not in done.stdout]
+        notes = [f"{len(missing)} of {len(leaves)} ISO 7401 values not printed whole, e.g. "
+                 f"{missing[:3]}"] if missing else []
+        return ("silent wrong" if missing or done.rc != 0 else "correct"), "", notes, done
+    case("analyze summary without --report", "command line",
+         f"{fourws} analyze BAG --no-sweep  # every ISO 7401 value of --json printed", summary)
 
 
 # ---------------------------------------------------------------------------------------------

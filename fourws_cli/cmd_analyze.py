@@ -1,6 +1,9 @@
 # SPDX-FileCopyrightText: 2026 fourws developers
 # SPDX-License-Identifier: Apache-2.0
-"""``fourws analyze BAG... [--report DIR] [--json]``: metrics and report of recorded runs."""
+"""``fourws analyze BAG... [--report DIR] [--json]``: metrics and report of recorded runs.
+
+Without ``--report`` or ``--json`` it prints, per run, every metric of its maneuver as aligned
+``key value`` rows (the key names the unit; values to 6 significant digits, never cut)."""
 
 from __future__ import annotations
 
@@ -124,8 +127,35 @@ def _expected(metric: str, r: Any) -> bool:
                       "iso3888_lane_change")
 
 
-def _print_summary(r: Any) -> None:
-    """A few lines per run when neither --json nor --report is given."""
+def _text(value: Any) -> str:
+    """A metric's value as the summary prints it: numbers to 6 significant digits, lists
+    whole (eigenvalues as (re, im) pairs), nothing cut."""
+    if isinstance(value, bool) or value is None:
+        return json.dumps(value)
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, (list, tuple)):
+        inner = [f"({', '.join(_text(v) for v in item)})" if isinstance(item, (list, tuple))
+                 else _text(item) for item in value]
+        return ", ".join(inner) if inner else "none"
+    return str(value)
+
+
+def _rows(value: Any, prefix: str = "") -> list[tuple[str, str]]:
+    """(dotted key, text) of every leaf of a metric group; notes become rows of their own,
+    empty note lists none."""
+    if isinstance(value, dict):
+        return [row for key, item in value.items() for row in _rows(item, f"{prefix}{key}.")]
+    key = prefix[:-1]
+    if key.rsplit(".", 1)[-1] == "notes":
+        return [(key, str(note)) for note in value]
+    return [(key, _text(value))]
+
+
+def summary_lines(r: Any) -> list[str]:
+    """What ``fourws analyze`` prints per run when neither --json nor --report is given:
+    the run, then each metric group of its maneuver as aligned ``key value`` rows, every value
+    whole (the key names its unit)."""
     # the analysis package is imported where it is used, as in run(): `fourws --help` stays
     # free of scipy and the bag reader
     from fourws_analysis.standards import STANDARD_KEYS
@@ -133,8 +163,17 @@ def _print_summary(r: Any) -> None:
     metrics = r.metrics()
     speed = metrics["speed_mps"]
     where = f", {speed:.1f} m/s" if speed else ""
-    print(f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}{where}")
+    lines = [f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}{where}, "
+             f"recording {metrics['recording']}"]
     for key in ("frequency_response", "iso7401_step", "iso4138_steady_state",
                 "iso3888_lane_change", "identified_modes", *STANDARD_KEYS.values()):
         if key in metrics:
-            print(f"  {key}: {json.dumps(metrics[key])[:300]}")
+            rows = _rows(metrics[key])
+            width = max((len(k) for k, _ in rows), default=0)
+            lines.append(f"  {key}:")
+            lines += [f"    {k:<{width}}  {text}" for k, text in rows]
+    return lines
+
+
+def _print_summary(r: Any) -> None:
+    print("\n".join(summary_lines(r)))

@@ -12,8 +12,11 @@ summary and checksums and a ``metadata.yaml`` (the damaged file stays beside as
 ``*.mcap.damaged``), so rosbags, Foxglove and ``fourws analyze --allow-incomplete`` open it.
 Its accounting is recomputed from the publishers' final counts found in the bag.
 
+Both refuse a bag that is still being recorded (its writer holds the lock of
+``fourws_run.bagfile.LOCK_FILE``): a repair would rewrite the file under the recorder.
+
 Exit code: 0 every bag complete; 1 a bag is incomplete or damaged (repaired or not); 2 a path
-is not a bag or cannot be written.
+is not a bag, is still being recorded, or cannot be written.
 """
 
 from __future__ import annotations

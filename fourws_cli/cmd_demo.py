@@ -29,11 +29,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scenario's laws, analyse the bags, print where everything is."""
+    from fourws_ros.domains import domain_for_run  # fourws_ros: not for --help
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
     from fourws_run.config import RunConfig  # rosbags, mcap: not for --help
     from fourws_run.scenario import load_scenario  # rosbags, mcap: not for --help
 
     scenario = load_scenario(args.scenario)
+    domain_for_run().release()  # a bad ROS_DOMAIN_ID is exit 2 before the output folder
     out = args.out or Path("runs") / time.strftime("demo-%Y%m%dT%H%M%SZ", time.gmtime())
     out.mkdir(parents=True, exist_ok=True)
     print(f"fourws demo: scenario {scenario.name!r}, laws {', '.join(scenario.laws)}, "

@@ -59,6 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scenario; returns the exit code."""
+    from fourws_ros.domains import domain_for_run  # fourws_ros: not for --help
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
     # rosbags, mcap: not for --help
     from fourws_run.config import USER_LAW, ControllerSpec, RunConfig
@@ -91,7 +92,14 @@ def run(args: argparse.Namespace) -> int:
         for law in laws:
             if law not in available_laws():
                 raise UnknownNameError("law", law, available_laws())
+        for law in laws:
+            if laws.count(law) > 1:  # it would run (and be recorded) as often
+                raise ParameterError("--law", f"{law!r} is given {laws.count(law)} times; "
+                                     "each law runs once")
     out = args.out if args.out is not None else Path(scenario.recording.output_dir)
+    # the environment is input too: a ROS_DOMAIN_ID no run can use (not a domain ID, or held
+    # by another fourws run) is exit 2 before any run folder exists (run_graph leases it)
+    domain_for_run().release()
     records = []
     for law in laws:
         # a series: every member is a run of its own (fourws_run.series)

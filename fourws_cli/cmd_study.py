@@ -76,10 +76,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _study(args: argparse.Namespace, target: str) -> int:
     from fourws_study.execute import check_size, run_study  # numba, pyarrow: not for --help
-    from fourws_study.report import write_study_report  # numba, pyarrow: not for --help
+    # numba, pyarrow: not for --help
+    from fourws_study.report import check_report, write_study_report
     from fourws_study.spec import load_study  # numba, pyarrow: not for --help
 
     study = load_study(target)
+    check_report(study)
     check_size(study, args.force)
     out = args.out if args.out is not None else Path("studies") / study.name
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
@@ -127,6 +129,7 @@ def _report(root: Path) -> int:
 
 
 def _rerun(args: argparse.Namespace, root: Path) -> int:
+    from fourws_ros.domains import domain_for_run  # fourws_ros: not for --help
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
     from fourws_run.record import Outcome  # rosbags, mcap: not for --help
     from fourws_study.kernel import DURATION  # numba, pyarrow: not for --help
@@ -138,10 +141,11 @@ def _rerun(args: argparse.Namespace, root: Path) -> int:
     study = study_of(root)
     config = study.config(study.point(args.point))
     try:
-        row = study_row(root, args.point)
+        row = study_row(root, study, args.point)
     except FourwsError:
         row = None
     out = args.out if args.out is not None else root / "reruns"
+    domain_for_run().release()  # a bad ROS_DOMAIN_ID is exit 2 before the run folder
     record = run_graph(config, out, run_name=f"point-{args.point}", overwrite=True)
     print("\n".join(record.summary_lines()), flush=True)
     if record.bag_path is None or record.outcome not in (Outcome.COMPLETED, Outcome.ABORTED,

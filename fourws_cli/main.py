@@ -20,14 +20,25 @@ import argparse
 import importlib
 import pkgutil
 import sys
+import xml.etree.ElementTree as ET
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
 
 import fourws_cli
-from fourws_cli.nodes import run_node
+from fourws_cli.nodes import HELP as NODE_HELP
+from fourws_cli.nodes import NODES, run_node
 from fourws_sim.errors import FourwsError, one_line
 from fourws_sim.lanes import use_wide_vectors
+from fourws_sim.params import find_resource_dir
 
 #: Exit code of a user error: bad input, or an output that cannot be written.
 EXIT_USER_ERROR = 2
+#: What ``fourws --help`` says first.
+DESCRIPTION = ("fourws: a four-wheel-steering car simulated as a ROS 2 node graph (8-DOF model, "
+               "rear-steer laws, maneuvers, recorded and checked bags), with the offline "
+               "analyses of its runs, models and studies.")
+EPILOG = ("'fourws COMMAND --help' gives a command's options; README.md the workflows, the "
+          "files and the exit codes.")
 
 
 def _commands() -> dict[str, object]:
@@ -38,16 +49,40 @@ def _commands() -> dict[str, object]:
     return dict(sorted(found.items()))
 
 
+def fourws_version() -> str:
+    """The installed version of fourws: its pip metadata, else (a colcon install, which has
+    none) the ``package.xml`` of its ament prefix or checkout."""
+    try:
+        return version("fourws")
+    except PackageNotFoundError:
+        pass
+    root = find_resource_dir(Path(__file__).resolve().parent.parent, "fourws", "",
+                             "package.xml")
+    try:
+        return ET.parse(root / "package.xml").getroot().findtext("version") or "unknown"
+    except (OSError, ET.ParseError):
+        return "unknown"
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (subcommands imported lazily, only their parsers)."""
-    parser = argparse.ArgumentParser(prog="fourws", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="fourws", description=DESCRIPTION, epilog=EPILOG)
+    parser.add_argument("--version", action="version",
+                        version=f"fourws {fourws_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name, modname in _commands().items():
+    for name, modname in sorted({**_commands(), "node": ""}.items()):
+        if name == "node":
+            # listed for --help only: main() hands `fourws node ...` to run_node untouched
+            p = sub.add_parser(name, help=NODE_HELP, description=NODE_HELP)
+            p.add_argument("node", metavar="NAME", choices=list(NODES),
+                           help=f"one of {', '.join(NODES)}")
+            p.add_argument("ros_args", nargs=argparse.REMAINDER, metavar="--ros-args ...")
+            continue
         mod = importlib.import_module(modname)
         p = sub.add_parser(name, help=getattr(mod, "HELP", ""),
                            description=getattr(mod, "HELP", ""))
         mod.add_arguments(p)
-        p.set_defaults(_run=mod.run)
+        p.set_defaults(_run=mod.run, _parser=p)
     return parser
 
 
@@ -63,7 +98,11 @@ def main(argv: list[str] | None = None) -> int:
             argv[:1] == ["bench"] and "--study" in argv):
         use_wide_vectors()
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        # argparse blames the top level for a subcommand's unknown option (and prints the
+        # top-level usage); the subcommand's own usage is the helpful one
+        getattr(args, "_parser", parser).error(f"unrecognized arguments: {' '.join(extra)}")
     if not getattr(args, "_run", None):
         parser.print_help()
         return 1

@@ -4,14 +4,30 @@
 
 :data:`NODES` is the one table of the nodes: CMakeLists.txt installs an executable per entry
 under ``lib/fourws`` (``ros2 run fourws NAME``) and setup.py a console script ``fourws-NAME``
-(the venv, where the ``ros2`` CLI does not exist). Both read it without importing fourws, so
-this module imports nothing but the standard library at its top.
+(the venv, where the ``ros2`` CLI does not exist); both enter through :func:`run_node` (the
+console scripts through :data:`entry`). Both read the table without importing fourws, so this
+module imports nothing but the standard library at its top.
+
+A node is stopped with SIGINT or SIGTERM at any time, also while it is still starting: the
+launcher stops every node of a run that failed early, Ctrl-C stops a graph started by hand.
+Its own handling (:func:`fourws_ros.runtime.run_node`) is installed only once rclpy, numpy
+and the node's modules are imported, seconds after the process started; until then
+:func:`run_node` has a handler that ends the process at once with exit code
+:data:`EXIT_STOPPED` (Python's default handler raised KeyboardInterrupt in the middle of an
+import, and the node's log got its traceback).
 """
 
 from __future__ import annotations
 
+import functools
 import importlib
+import os
+import signal
 import sys
+import types
+
+#: One line for ``fourws --help``.
+HELP = "run one node of the graph in this process: fourws node NAME --ros-args ..."
 
 #: Node name -> module with a ``main(args) -> int``.
 NODES: dict[str, str] = {
@@ -22,6 +38,15 @@ NODES: dict[str, str] = {
     "replay": "fourws_ros.replay_node",
     "example_controller": "fourws_ros.example_controller",
 }
+
+#: Exit code of a node stopped by a signal while starting: a stop asked for, as a node
+#: stopped by a signal later (``fourws_ros.runtime.EXIT_OK``).
+EXIT_STOPPED = 0
+
+
+def _stopped_while_starting(_signum: int, _frame: object) -> None:
+    # nothing is open yet (no ROS context, no file): leave at once, wherever the import is
+    os._exit(EXIT_STOPPED)
 
 
 def run_node(argv: list[str]) -> int:
@@ -34,5 +59,17 @@ def run_node(argv: list[str]) -> int:
         print(f"fourws node: error: unknown node {name!r}; valid: {', '.join(NODES)}",
               file=sys.stderr)
         return 2
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) is not signal.SIG_IGN:  # an ignored signal stays ignored
+            signal.signal(sig, _stopped_while_starting)
     module = importlib.import_module(NODES[name])
     return int(module.main([f"fourws_{name}", *rest]) or 0)
+
+
+def _console_script(name: str) -> int:
+    return run_node([name, *sys.argv[1:]])
+
+
+#: The console scripts' entry points, ``fourws_cli.nodes:entry.NAME`` (setup.py).
+entry = types.SimpleNamespace(**{name: functools.partial(_console_script, name)
+                                 for name in NODES})

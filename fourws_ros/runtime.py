@@ -7,8 +7,9 @@ A node process ends in one of four ways, with a distinct exit code the launcher 
 * :data:`EXIT_OK` (0) — SIGINT/SIGTERM or the node asked to stop (``node.finished``);
 * :data:`EXIT_USER_ERROR` (2) — a bad start-up input: a :class:`fourws_sim.errors.FourwsError`
   (bad parameter, unknown name, malformed YAML), a parameter rclpy refuses (type, range,
-  name), or arguments rcl cannot take (a missing, binary or malformed ``--params-file``); its
-  message, on one line that names the field or file, goes to stderr;
+  name), a ``--params-file`` that is empty, has no section for the node or sets a parameter
+  the node does not declare, or arguments rcl cannot take (a missing, binary or malformed
+  ``--params-file``); its message, on one line that names the field or file, goes to stderr;
 * :data:`EXIT_RUN_STOPPED` (3) — the node stopped the run for a reason of the simulation
   (non-finite state, ...), given in ``node.stop_reason``;
 * :data:`EXIT_INCOMPLETE` (4) — the recorder closed a bag that does not hold every message
@@ -42,7 +43,7 @@ from rclpy.task import Future
 
 from fourws_ros import topics
 from fourws_sim.config_yaml import read_yaml
-from fourws_sim.errors import FourwsError, one_line
+from fourws_sim.errors import FourwsError, ParameterError, one_line
 
 EXIT_OK = 0
 EXIT_CRASH = 1
@@ -133,19 +134,80 @@ def _exit_after(seconds: float, code: int, name: str) -> None:
     timer.start()
 
 
+def _params_files(argv: Sequence[str]) -> list[str]:
+    return [value for flag, value in zip(argv, argv[1:]) if flag == "--params-file"]
+
+
 def check_params_files(argv: Sequence[str]) -> None:
     """Read every ``--params-file`` of ``argv`` with fourws's strict YAML reader before rcl
     does: rcl keeps the last of two equal keys without a word and reads a NUL-cut file up to
-    the NUL; here either is an error naming the key or the file.
+    the NUL, and starts a node on an empty file; here each is an error naming the key or the
+    file.
 
     Raises
     ------
     fourws_sim.errors.ParameterError
-        A parameter file that is missing, not UTF-8, not valid YAML, or has a duplicate key.
+        A parameter file that is missing, not UTF-8, not valid YAML, has a duplicate key, or
+        is empty (no node section).
     """
-    for flag, value in zip(argv, argv[1:]):
-        if flag == "--params-file":
-            read_yaml(value)
+    for path in _params_files(argv):
+        data = read_yaml(path)
+        if not isinstance(data, dict) or not data:
+            raise ParameterError("<file>", "is empty or not a ROS 2 parameter file (a "
+                                 "section per node: NODE: {ros__parameters: {...}}, or /** for "
+                                 "every node)", path)
+
+
+def _section_matches(pattern: str, fqn: str) -> bool:
+    """Whether a parameter-file section applies to the node ``fqn`` as rcl matches it: a
+    leading ``/`` implied, ``*`` one name token, ``**`` any number of them (ROS 2 design
+    article "ROS command line arguments")."""
+    want = [t for t in pattern.split("/") if t]
+    have = [t for t in fqn.split("/") if t]
+
+    def match(i: int, j: int) -> bool:
+        if i == len(want):
+            return j == len(have)
+        if want[i] == "**":
+            return any(match(i + 1, k) for k in range(j, len(have) + 1))
+        return j < len(have) and want[i] in ("*", have[j]) and match(i + 1, j + 1)
+
+    return match(0, 0)
+
+
+def _flat_names(params: Any, prefix: str = "") -> list[str]:
+    if not isinstance(params, dict):
+        return [prefix[:-1]] if prefix else []
+    return [name for key, value in params.items()
+            for name in _flat_names(value, f"{prefix}{key}.")]
+
+
+def check_node_params(node: Any, argv: Sequence[str]) -> None:
+    """Refuse what rclpy ignores without a word: a ``--params-file`` with no section for
+    this node (its name, a wildcard such as ``/**``), or one that sets a parameter the node
+    does not declare under such a section (a typo runs on the default). Sections of other
+    nodes are theirs: several nodes share one file.
+
+    Raises
+    ------
+    fourws_sim.errors.ParameterError
+        Naming the parameter (or ``<file>``), the node and the file.
+    """
+    fqn = node.get_fully_qualified_name()
+    for path in _params_files(argv):
+        data = read_yaml(path)
+        sections = [key for key in data if _section_matches(str(key), fqn)]
+        if not sections:
+            raise ParameterError("<file>", f"has no section for node {fqn} (its sections: "
+                                 f"{', '.join(map(str, data))}; /** is read by every node)",
+                                 path)
+        for key in sections:
+            params = data[key].get("ros__parameters") if isinstance(data[key], dict) else None
+            for name in _flat_names(params):
+                if not node.has_parameter(name):
+                    valid = ", ".join(sorted(node.list_parameters([], 0).names))
+                    raise ParameterError(name, f"not a parameter of node {fqn} (under "
+                                         f"{key!r}; valid: {valid})", path)
 
 
 def make_executor(context: Any = None, message_info: bool = False) -> Any:
@@ -211,6 +273,7 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     try:
         try:
             node = factory()
+            check_node_params(node, argv)
         except (FourwsError, ParameterException, NameValidationException) as exc:
             # ParameterException: a --ros-args/-p or --params-file value of the wrong type or
             # outside its descriptor's range

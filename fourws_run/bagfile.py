@@ -17,11 +17,17 @@ hashes from :func:`typestore`); the MCAP file itself is written with the ``mcap`
   stored, :mod:`fourws_run.accounting`) goes into ``metadata.yaml`` ``custom_data`` and into
   an MCAP metadata record ``fourws``;
 * **repair**: :func:`repair_bag` rebuilds a bag whose writer was killed (no summary, no
-  ``metadata.yaml``) from its complete chunks, so rosbags, Foxglove and fourws open it.
+  ``metadata.yaml``) from its complete chunks, so rosbags, Foxglove and fourws open it;
+* **one writer**: a :class:`BagWriter` holds an exclusive ``flock(2)`` on the bag's
+  :data:`LOCK_FILE` from before its MCAP file exists until the bag is closed (the file is
+  removed then); the kernel drops the lock when the writer dies, so only a bag still being
+  written is locked. :func:`repair_bag` and :func:`verify_bag` refuse a locked bag (the
+  repair would rewrite the file under the recorder), naming the writer's process.
 """
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import struct
@@ -59,6 +65,8 @@ MCAP_METADATA = "fourws"
 #: A chunk is closed once its records exceed this many bytes (besides the recorder's time-based
 #: flushes), bounding what a killed writer can lose.
 CHUNK_BYTES = 256 * 1024
+#: The file in a bag folder its writer holds locked (with its process id) while it writes.
+LOCK_FILE = ".fourws-recording.lock"
 
 
 class BagError(FourwsError):
@@ -70,6 +78,74 @@ def _fourws_version() -> str:
         return version("fourws")
     except PackageNotFoundError:
         return "unknown"
+
+
+# --------------------------------------------------------------------------------------------
+# the writer's lock
+
+
+class _WriterLock:
+    """An exclusive ``flock`` on ``folder/LOCK_FILE`` (module docstring).
+
+    Raises
+    ------
+    BagError
+        Another process holds it.
+    """
+
+    def __init__(self, folder: Path) -> None:
+        self.path = folder / LOCK_FILE
+        handle = open(self.path, "a+")  # appending: the holder's process id stays readable
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            handle.close()
+            raise BagError(_being_recorded(folder, recording_process(folder))) from None
+        handle.truncate(0)
+        handle.write(f"{os.getpid()}\n")
+        handle.flush()
+        self._handle: Any = handle
+
+    def release(self, remove: bool) -> None:
+        """Give the lock up; ``remove`` deletes the file first (a closed bag has none)."""
+        if self._handle is None:
+            return
+        if remove:
+            self.path.unlink(missing_ok=True)
+        fcntl.flock(self._handle, fcntl.LOCK_UN)
+        self._handle.close()
+        self._handle = None
+
+
+def recording_process(path: str | Path) -> int | None:
+    """The process id of the writer that holds the bag ``path`` locked (0 if its lock file
+    does not say), or None when no process writes it (no lock file, or a stale one of a
+    killed writer)."""
+    lock = Path(path) / LOCK_FILE
+    try:
+        handle = open(lock)
+    except OSError:
+        return None
+    with handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            text = handle.read(32).strip()
+            return int(text) if text.isdigit() else 0
+        fcntl.flock(handle, fcntl.LOCK_UN)
+    return None
+
+
+def _being_recorded(path: str | Path, pid: int | None) -> str:
+    who = f"process {pid}" if pid else "another process"
+    return (f"bag {str(path)!r} is being recorded ({who} holds {LOCK_FILE}); wait until "
+            "its recording has ended")
+
+
+def _refuse_while_recorded(path: str | Path) -> None:
+    pid = recording_process(path)
+    if pid is not None:
+        raise BagError(_being_recorded(path, pid))
 
 
 # --------------------------------------------------------------------------------------------
@@ -140,7 +216,13 @@ class _McapStorage:
     def __init__(self, path: Path, compression: Any) -> None:
         del compression  # fourws bags are not compressed (the CRCs cover the raw records)
         self.path = path / f"{path.name}.mcap"
-        self._file = self.path.open("xb")
+        # held from before the MCAP file exists (rosbags has just made the folder)
+        self.lock = _WriterLock(path)
+        try:
+            self._file = self.path.open("xb")
+        except OSError:
+            self.lock.release(remove=True)
+            raise
         self._mcap = McapFileWriter(self._file, chunk_size=CHUNK_BYTES,
                                     compression=CompressionType.NONE, enable_crcs=True,
                                     enable_data_crcs=True)
@@ -264,16 +346,23 @@ class BagWriter:
             storage.flush()
 
     def close(self) -> None:
-        """Write the summary, the metadata and close the bag."""
+        """Write the summary, the metadata and close the bag (then release its lock)."""
         if self._open:
             self._open = False
-            self._writer.close()
+            storage = self._writer.storage
+            try:
+                self._writer.close()
+            finally:
+                storage.lock.release(remove=True)
 
     def abort(self) -> None:
-        """Close the file without summary or metadata (as a killed writer would leave it)."""
+        """Close the file without summary or metadata (as a killed writer would leave it:
+        the lock file stays, unlocked)."""
         if self._open:
             self._open = False
+            storage = self._writer.storage
             self._writer.abort()
+            storage.lock.release(remove=False)
 
     def __enter__(self) -> "BagWriter":
         return self.open()
@@ -518,8 +607,9 @@ def verify_bag(path: str | Path) -> BagCheck:
     Raises
     ------
     BagError
-        The bag does not exist or is not a bag.
+        The bag does not exist, is not a bag, or is being recorded (:data:`LOCK_FILE`).
     """
+    _refuse_while_recorded(path)
     return read_bag(path)[1]
 
 
@@ -545,6 +635,8 @@ def read_bag(path: str | Path) -> tuple[list[RawMessage], BagCheck]:
         if scan.damage:
             problems.append(f"{file.name} damaged after {len(scan.messages)} messages "
                             f"({scan.damage})")
+        elif not scan.complete_file and recording_process(path) is not None:
+            problems.append(f"{file.name} is being recorded: not closed yet")
         elif not scan.complete_file:
             problems.append(f"{file.name} was not closed (no summary): its writer stopped "
                             "early; `fourws bag repair` rebuilds it")
@@ -619,13 +711,26 @@ def repair_bag(path: str | Path) -> RepairResult:
     Raises
     ------
     BagError
-        Not a bag directory, nothing recoverable, or the new files cannot be written.
+        Not a bag directory, being recorded (:data:`LOCK_FILE`), nothing recoverable, or the
+        new files cannot be written.
     """
     path = Path(path)
     files = mcap_files(path)
     if not path.is_dir() or len(files) != 1:
         raise BagError(f"bag {str(path)!r}: repair needs a bag directory with one .mcap file")
-    source = files[0]
+    # held for the whole repair: no writer and no second repair meanwhile
+    try:
+        lock = _WriterLock(path)
+    except OSError as exc:
+        raise BagError(f"bag {str(path)!r}: cannot lock it for the repair "
+                       f"({_os_reason(exc)})") from None
+    try:
+        return _repair_locked(path, files[0])
+    finally:
+        lock.release(remove=True)  # a killed writer's stale lock file goes too
+
+
+def _repair_locked(path: Path, source: Path) -> RepairResult:
     scan = scan_mcap(source)
     if not scan.messages:
         raise BagError(f"bag {str(path)!r}: nothing recoverable "
@@ -660,11 +765,11 @@ def repair_bag(path: str | Path) -> RepairResult:
             leftover.unlink()
         if tmp_dir.exists():
             tmp_dir.rmdir()
-    return RepairResult(str(path), scan.counts(), scan.damage, str(backup), verify_bag(path))
+    # read_bag, not verify_bag: this process holds the lock
+    return RepairResult(str(path), scan.counts(), scan.damage, str(backup), read_bag(path)[1])
 
 
 __all__ = ["BAG_VERSION", "BagCheck", "BagError", "BagWriter", "CHUNK_BYTES", "KEY_ACCOUNTING",
-           "KEY_COMPLETE", "MSG_DIR", "McapScan", "RawMessage", "RepairResult", "bag_typestore",
-           "mcap_files",
-           "metadata_counts", "read_bag", "read_metadata", "repair_bag", "scan_mcap",
-           "typestore", "verify_bag"]
+           "KEY_COMPLETE", "LOCK_FILE", "MSG_DIR", "McapScan", "RawMessage", "RepairResult",
+           "bag_typestore", "mcap_files", "metadata_counts", "read_bag", "read_metadata",
+           "recording_process", "repair_bag", "scan_mcap", "typestore", "verify_bag"]

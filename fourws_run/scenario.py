@@ -335,6 +335,10 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     for law in laws_data:
         if law not in known_laws:
             raise UnknownNameError("law", law, known_laws, source)
+    for law in laws_data:
+        if laws_data.count(law) > 1:  # it would run (and be recorded) as often
+            raise ParameterError("laws", f"{law!r} is listed {laws_data.count(law)} times; "
+                                 "each law runs once", source)
     law_options = data.get("law_options") or {}
     if not isinstance(law_options, Mapping) or not all(
             isinstance(v, Mapping) for v in law_options.values()):

@@ -1,6 +1,7 @@
 # SPDX-FileCopyrightText: 2026 fourws developers
 # SPDX-License-Identifier: Apache-2.0
-"""The one reader of fourws configuration YAML (vehicles, maneuvers, scenarios, parameter files).
+"""The one reader of fourws configuration YAML (vehicles, maneuvers, scenarios, studies, node
+parameter files).
 
 PyYAML's ``safe_load`` reads YAML 1.1 and trusts its input; a configuration reader must not:
 
@@ -226,6 +227,28 @@ def plain_copy(data: Any) -> Any:
     return data
 
 
+def read_config_text(path: str | Path) -> str:
+    """The text of a configuration file, checked as :func:`read_yaml` checks it (readable, at
+    most :data:`MAX_FILE_BYTES`, UTF-8), for a reader that keeps the text beside the parsed
+    data (a study stores its file as given).
+
+    Raises
+    ------
+    ParameterError
+        The file cannot be read, is too large or is not UTF-8 text (field ``<file>``).
+    """
+    path = Path(path)
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read(MAX_FILE_BYTES + 1)  # bounded even for a FIFO or /dev/zero
+    except OSError as exc:
+        raise ParameterError("<file>", f"cannot be read ({exc.strerror or exc})",
+                             str(path)) from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ParameterError("<file>", f"larger than {MAX_FILE_BYTES} bytes", str(path))
+    return _decode(data, str(path))
+
+
 def read_yaml(path: str | Path) -> Any:
     """Read and parse a configuration file strictly (:func:`parse_yaml`).
 
@@ -235,15 +258,8 @@ def read_yaml(path: str | Path) -> Any:
         The file cannot be read, is larger than :data:`MAX_FILE_BYTES`, is not UTF-8 or not
         valid strict YAML (field ``<file>`` or the key concerned; the file is named).
     """
-    path = Path(path)
-    try:
-        with open(path, "rb") as stream:
-            data = stream.read(MAX_FILE_BYTES + 1)  # bounded even for a FIFO or /dev/zero
-    except OSError as exc:
-        raise ParameterError("<file>", f"cannot be read ({exc.strerror or exc})",
-                             str(path)) from None
-    return parse_yaml(data, str(path))
+    return parse_yaml(read_config_text(path), str(path))
 
 
 __all__ = ["MAX_ALIASES", "MAX_DEPTH", "MAX_FILE_BYTES", "MAX_NODES", "StrictLoader",
-           "parse_yaml", "read_yaml"]
+           "parse_yaml", "read_config_text", "read_yaml"]

@@ -599,6 +599,13 @@ class Tire:
             if not isinstance(values, Mapping):
                 raise ParameterError(f"{prefix}{group}",
                                      f"must be a mapping, got {describe(values)}", source)
+            if values:
+                # numba (the tire modules are compiled kernels): only a file with coefficients
+                # pays for it; their names and signs are the tire module's, checked at load
+                # for every tool, not only by the tools that integrate the tire
+                from fourws_sim.tires import get_tire
+
+                get_tire(group).pack_mapping(values, source, prefix=f"{prefix}{group}.")
             for key, v in values.items():
                 name = f"{prefix}{group}.{key}"
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):

@@ -41,8 +41,7 @@ from threadpoolctl import threadpool_limits
 from fourws_sim.errors import ParameterError, one_line
 from fourws_study.point import run_points
 from fourws_study.spec import MAX_POINTS, Study
-from fourws_study.store import (RESULTS, StudyStore, encode_block, read_results, rows_to_table,
-                                schema)
+from fourws_study.store import RESULTS, StudyStore, encode_block, rows_to_table, schema
 
 BACKENDS = ("local", "dask")
 
@@ -401,7 +400,7 @@ def run_study(study: Study, out: str | Path, *, workers: int = 1, backend: str =
         run.seconds = time.perf_counter() - t0
     if run.done:
         run.results, _ = store.merge()
-        statuses = read_results(store.root).column("status").to_pylist()
+        statuses = store.read_results().column("status").to_pylist()
         run.statuses = Counter(statuses)
     return run
 

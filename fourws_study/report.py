@@ -35,8 +35,8 @@ import scipy.optimize
 
 from fourws_analysis import compare, linear
 from fourws_analysis.report import REPORT_CSS
-from fourws_sim.errors import FourwsError
-from fourws_study.point import ZERO_MODE_PER_S, law_for, linear_model_of
+from fourws_sim.errors import FourwsError, ParameterError
+from fourws_study.point import ZERO_MODE_PER_S, columns, law_for, linear_model_of
 from fourws_study.spec import KMH_PER_MPS, Axis, Study
 from fourws_study.store import read_results
 
@@ -360,12 +360,37 @@ def _save(fig: Any, path: Path) -> Path:
     return path
 
 
+def check_report(study: Study) -> None:
+    """Refuse a report metric (``report.metrics``, ``report.worst.metric``) that is no
+    numeric result column of ``study`` (the report drew nothing for it, without a word).
+
+    Raises
+    ------
+    ParameterError
+        Naming the field, the metric, the study file and every valid name.
+    """
+    numeric = [name for name, kind in columns(study) if kind in ("float64", "int64", "bool")]
+    for field, names in (("report.metrics", study.report.metrics),
+                         ("report.worst.metric", (study.report.worst_metric,))):
+        for name in names:
+            if name not in numeric:
+                raise ParameterError(field, f"{name!r} is not a numeric result column "
+                                     f"(valid: {', '.join(numeric)})", study.source)
+
+
 def write_study_report(root: str | Path, study: Study, plots: bool = True) -> Path:
-    """Write ``root/report/index.html`` and its PNGs from the finished rows of ``root``."""
+    """Write ``root/report/index.html`` and its PNGs from the finished rows of ``root``.
+
+    Raises
+    ------
+    ParameterError
+        A report metric is no result column (:func:`check_report`), or a block is damaged.
+    """
+    check_report(study)
     root = Path(root)
     out = root / "report"
     out.mkdir(parents=True, exist_ok=True)
-    table = read_results(root)
+    table = read_results(root, study)
     laws = sorted(set(_column(table, "law")), key=str)
     status = list(_column(table, "status"))
     counts = {s: status.count(s) for s in ("ok", "spun", "diverged", "error")}
@@ -440,6 +465,7 @@ def write_study_report(root: str | Path, study: Study, plots: bool = True) -> Pa
     return index
 
 
-__all__ = ["DEFAULT_METRICS", "MAX_PANELS", "analytic_boundary", "critical_speed_8dof_lin",
+__all__ = ["DEFAULT_METRICS", "MAX_PANELS", "analytic_boundary", "check_report",
+           "critical_speed_8dof_lin",
            "figure_distributions", "figure_heat", "figure_stability", "worst_points",
            "write_study_report"]

@@ -54,15 +54,15 @@ def study_of(root: str | Path) -> Study:
     return study
 
 
-def study_row(root: str | Path, point: int) -> dict[str, Any]:
-    """The row of ``point`` in the study folder ``root``.
+def study_row(root: str | Path, study: Study, point: int) -> dict[str, Any]:
+    """The row of ``point`` of ``study`` in its folder ``root``.
 
     Raises
     ------
     ParameterError
-        The point has not been run.
+        The point has not been run, or a block file is damaged.
     """
-    table = read_results(root)
+    table = read_results(root, study)
     rows = table.filter(pc.equal(table.column("point"), point)).to_pylist()
     if not rows:
         raise ParameterError("--point", f"point {point} is not in the results of {root}")

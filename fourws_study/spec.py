@@ -26,7 +26,7 @@ A study file (``config/studies/<name>.yaml``)::
           truncate: [0.7, 1.4]    # optional bounds of the draw (inverse-CDF truncation)
     report:                       # optional (fourws_study.report)
       map_axes: [speed_kmh, belief.cornering_stiffness_scale_front]
-      metrics: [max_abs_sideslip_rad, ...]
+      metrics: [max_abs_sideslip_rad, ...]   # numeric result columns (checked)
       worst: {metric: max_abs_sideslip_rad, count: 20}
     spin_sideslip_rad: 0.349      # optional: |sideslip| above which a run has spun
     block_size: 8                 # optional: points per task
@@ -76,7 +76,7 @@ from fourws_control import make_loop_law
 from fourws_control.registry import LAWS
 from fourws_run.config import RunConfig, software_versions
 from fourws_run.scenario import Scenario, load_scenario, scenario_from_mapping
-from fourws_sim.config_yaml import plain_copy
+from fourws_sim.config_yaml import parse_yaml, plain_copy, read_config_text
 from fourws_sim.errors import FourwsError, ParameterError, UnknownNameError
 from fourws_sim.maneuvers import ManeuverSpec, maneuver_spec_from_mapping
 from fourws_sim.models import eightdof
@@ -528,12 +528,8 @@ def load_study(path_or_name: str | Path) -> Study:
         An unknown law, vehicle, maneuver or scenario name.
     """
     path = resolve_config_path("study", path_or_name, STUDY_DIR)
-    text = path.read_text()
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        problem = " ".join(str(exc).split())
-        raise ParameterError("<file>", f"not valid YAML ({problem})", str(path)) from None
+    text = read_config_text(path)
+    data = parse_yaml(text, str(path))
     return study_from_mapping(data, str(path), text, default_name=path.stem)
 
 

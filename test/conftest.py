@@ -1,6 +1,14 @@
 # SPDX-FileCopyrightText: 2026 fourws developers
 # SPDX-License-Identifier: Apache-2.0
-"""Shared pytest fixtures.
+"""Shared pytest fixtures, and the ROS environment every test starts from.
+
+The suite passes whatever the user's shell holds: the ROS settings a shell commonly exports
+(:data:`USER_ROS_ENVIRONMENT`: a ``ROS_DOMAIN_ID`` of the user's own graph, static peers, a
+middleware, a DDS profile or discovery server, security, a log format) are removed for the
+whole session when this file is imported (before any fixture, module-scoped ones included),
+and discovery is limited to this machine. A test that needs a domain reserves one
+(``ros_domain``); everything else -- ``fourws run``, ``run_graph``, the nodes a test starts --
+leases a free domain of its own (``fourws_ros.domains``), so runs side by side never share one.
 
 ``ros_domain``: a ROS domain ID reserved for one test (no other fourws test or run on this
 machine holds it) with discovery limited to this machine, so ROS tests never see each other
@@ -13,6 +21,18 @@ import os
 
 import pytest
 
+#: What a user's shell may export that changes how the suite's nodes find each other, talk or
+#: log (tests read the nodes' log lines): removed for every test.
+USER_ROS_ENVIRONMENT = (
+    "ROS_DOMAIN_ID", "ROS_STATIC_PEERS", "ROS_LOCALHOST_ONLY", "ROS_DISCOVERY_SERVER",
+    "ROS_SUPER_CLIENT", "RMW_IMPLEMENTATION", "FASTDDS_DEFAULT_PROFILES_FILE",
+    "FASTRTPS_DEFAULT_PROFILES_FILE", "CYCLONEDDS_URI", "ROS_SECURITY_ENABLE",
+    "ROS_SECURITY_STRATEGY", "ROS_SECURITY_KEYSTORE", "ROS_SECURITY_ENCLAVE_OVERRIDE",
+    "RCUTILS_CONSOLE_OUTPUT_FORMAT", "RCUTILS_COLORIZED_OUTPUT", "RCUTILS_LOGGING_USE_STDOUT",
+    "RCUTILS_LOGGING_BUFFERED_STREAM",
+)
+for _name in USER_ROS_ENVIRONMENT:
+    os.environ.pop(_name, None)
 # Whatever a test does, DDS discovery stays on this machine.
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 

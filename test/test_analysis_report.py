@@ -71,6 +71,53 @@ def test_report_and_metrics_of_a_step_run(tmp_path: Path, capsys) -> None:
     assert "excitation band" in metrics["unavailable"]["frequency_response"]
 
 
+def _leaves(value, prefix=""):
+    if isinstance(value, dict):
+        for key, item in value.items():
+            yield from _leaves(item, f"{prefix}{key}.")
+    else:
+        yield prefix[:-1], value
+
+
+def test_summary_without_report_prints_every_metric_whole(tmp_path: Path, capsys) -> None:
+    """``fourws analyze BAG`` alone printed each metric group as JSON cut at 300 characters
+    (the ISO 7401 group of a step is about 860): it prints every leaf of the groups --json
+    gives, one ``key value`` row each, the value equal to the JSON's to 6 significant
+    digits, and nothing else."""
+    _step_bag(tmp_path / "step")
+    assert main(["analyze", str(tmp_path / "step"), "--json", "--quiet", "--no-sweep"]) == 0
+    metrics = json.loads(capsys.readouterr().out)["runs"]["step"]
+    assert main(["analyze", str(tmp_path / "step"), "--quiet", "--no-sweep"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "step: maneuver step_steer, law fws, 20.0 m/s, recording complete"
+    groups = [k for k in ("iso7401_step", "identified_modes") if k in metrics]
+    assert groups == ["iso7401_step", "identified_modes"]
+    assert len(json.dumps(metrics["iso7401_step"])) > 300
+    expected = [f"  {g}:" for g in groups]
+    for group in groups:
+        start = lines.index(f"  {group}:")
+        rows = {}
+        for line in lines[start + 1:]:
+            if not line.startswith("    "):
+                break
+            key, _, text = line.strip().partition("  ")
+            rows.setdefault(key, []).append(text.strip())
+        leaves = [(k, v) for k, v in _leaves(metrics[group]) if v != []]
+        assert sorted(rows) == sorted({k for k, _ in leaves}), group
+        for key, value in leaves:
+            text = rows[key][0]
+            if isinstance(value, bool):
+                assert text == json.dumps(value)
+            elif isinstance(value, float):
+                assert float(text) == pytest.approx(value, rel=1e-5), key
+            elif key.endswith("eigenvalues_per_s"):
+                pairs = [complex(*map(float, p.strip("()").split(","))) for p in
+                         re.findall(r"\([^)]*\)", text)]
+                assert pairs == pytest.approx([complex(*v) for v in value], rel=1e-5)
+        expected += [f"    {k}" for k, _ in leaves]
+    assert len(lines) == 1 + len(expected), lines
+
+
 def test_json_output_and_partial_results_with_a_missing_bag(tmp_path: Path, capsys) -> None:
     """One good and one missing bag: metrics of the good one printed, the missing one named
     on stderr, exit code 1 (partial), no traceback."""

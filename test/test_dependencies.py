@@ -32,7 +32,10 @@ RUNTIME_DIRS = (*sorted(p.parent.name for p in ROOT.glob("fourws_*/__init__.py")
 #: present in the file;
 #: python3-numba: rosdistro PR 32274, all Ubuntu releases since PR 36477;
 #: python3-rosbags-pip: PR 37795; mcap-ros2-support: PR 36081 (pip mcap-ros2-support, which
-#: requires the mcap library the code imports).
+#: requires the mcap library the code imports). No key names the mcap library itself
+#: (rosdep/python.yaml and base.yaml at ros/rosdistro 8468e88, 2026-08-22, hold only
+#: mcap-ros2-support; Debian has no python3-mcap), so package.xml declares the key that brings
+#: it, and :data:`VIA_REQUIREMENT` records the requirement that does.
 LIBRARIES: dict[str, tuple[str, str]] = {
     "numpy": ("python3-numpy", "numpy"),
     "scipy": ("python3-scipy", "scipy"),
@@ -44,6 +47,12 @@ LIBRARIES: dict[str, tuple[str, str]] = {
     "mcap": ("mcap-ros2-support", "mcap"),
     "pytest": ("python3-pytest", "pytest"),
     "hypothesis": ("python3-hypothesis", "hypothesis"),
+}
+#: Import name -> (the distribution its rosdep key installs, the requirement of that
+#: distribution that brings the imported library): mcap-ros2-support 0.6.0's requires_dist on
+#: PyPI is ``mcap>=1.6.0``.
+VIA_REQUIREMENT: dict[str, tuple[str, str, tuple[int, ...]]] = {
+    "mcap": ("mcap-ros2-support", "mcap", (1, 6, 0)),
 }
 #: Import name -> PyPI distribution of the libraries of ``fourws study`` that have no key in the
 #: rosdep index (none found for pyarrow, dask/distributed or threadpoolctl): not in package.xml,
@@ -186,6 +195,18 @@ def test_every_declared_key_is_known(imports) -> None:
     # the build and test tools are ROS packages too, but for colcon
     ros_tools = [k for k in TOOL_KEYS if not k.startswith("python3-")]
     assert all(k in ros for k in ros_tools), sorted(set(ros_tools) - ros)
+
+
+def test_a_library_brought_by_another_key_is_pinned_within_its_requirement() -> None:
+    """mcap is imported, and its rosdep key is mcap-ros2-support's (none names mcap itself):
+    what rosdep installs then is mcap-ros2-support's ``mcap>=1.6.0``, and the venv's pin of
+    requirements.lock lies inside it, so both installs run a version that satisfies it."""
+    pins = dict(line.split("==", 1) for line in (ROOT / "requirements.lock").read_text()
+                .splitlines() if "==" in line and not line.startswith("#"))
+    for module, (key_dist, dist, minimum) in VIA_REQUIREMENT.items():
+        assert LIBRARIES[module] == (key_dist, dist), module
+        pinned = tuple(int(x) for x in pins[dist].split(".")[:3])
+        assert pinned >= minimum, (dist, pins[dist], minimum)
 
 
 def test_an_undeclared_import_is_reported(tmp_path: Path) -> None:

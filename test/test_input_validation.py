@@ -206,6 +206,45 @@ def test_wrong_type_is_one_line(tmp_path, key, value):
     _refused(load_vehicle, _write(tmp_path, data), key)
 
 
+TOOLS_WITH_A_VEHICLE = [
+    ("linear", "--model", "3dof", "--law", "sol1", "--speed-kmh", "85"),
+    ("handling", "--law", "sol1"),
+    ("lqr-gains", "--model", "2dof"),
+    ("equilibria", "--speed-mps", "20"),
+    ("tire-curves",),
+]
+
+
+@pytest.mark.parametrize("group, key, valid", [
+    ("sti", "bogus_key", "(valid: a0, a1, a2, a3, a4, b1, b3, b4, c1, c2, c3, c4, cs_per_fz, "
+                         "fzt_lb, g1, g2, k1, ka, kmu, snt, tp_psi, tw_in)"),
+    ("magic_formula", "PKY9", "(valid: FNOMIN, R0, "),
+], ids=["sti", "magic_formula"])
+def test_unknown_tire_coefficient_is_refused_by_every_tool(tmp_path, capsys, group, key,
+                                                           valid):
+    """An unknown key of the vehicle's tire coefficients (a typo the tire would have run
+    without) was accepted by ``fourws linear`` and ``handling`` and refused by ``fourws run``
+    only once its simulator node started, with exit code 1: the vehicle loader refuses it,
+    so every tool (and a scenario naming the vehicle) ends with exit code 2 and the same one
+    line naming the key, the valid names (Table C.1's 22 STI coefficients) and the file."""
+    from fourws_sim.tires import sti
+
+    assert len(sti.TABLE_C1) == 22
+    data = _vehicle("table_8_1")
+    data["tire"].setdefault(group, {})[key] = 1.0
+    path = _write(tmp_path, data, "bad_tire.yaml")
+    _refused(load_vehicle, path, f"tire.{group}.{key}", valid)
+    scenario = _write(tmp_path, {**yaml.safe_load((SHIPPED / "scenarios" / "default.yaml")
+                                                  .read_text()), "vehicle": str(path)},
+                      "scenario.yaml")
+    for command, *rest in [*TOOLS_WITH_A_VEHICLE, ("run",)]:
+        argv = [command, str(scenario), "--out", str(tmp_path / "runs")] \
+            if command == "run" else [command, "--vehicle", str(path), *rest]
+        code, err = _cli(capsys, *argv)
+        _one_line_error(code, err, command, f"tire.{group}.{key}: unknown", valid, str(path))
+    assert not (tmp_path / "runs").exists()
+
+
 # ---------------------------------------------------------------- plausibility: vehicles
 
 ABSURD_VEHICLE = [  # issue 9's list
@@ -455,6 +494,82 @@ def test_resampling_step_bounds(small_bag, where, factor, ok):
             B.resample(run, dt)
 
 
+_WRITER = """
+import signal, sys
+from fourws_analysis import bag as B
+store = B.typestore()
+mt = B.TOPIC_TYPES[B.TOPIC_STATE]
+writer = B.BagWriter(sys.argv[1]).open()
+for i in range(50):
+    msg = B.make_message(mt, header={"stamp": B.stamp(0.01 * i)}, step=i, model="2dof")
+    writer.write_raw(B.TOPIC_STATE, store.serialize_cdr(msg, mt), 10_000_000 * i)
+writer.flush()
+print("recording", flush=True)
+sys.stdin.readline()
+writer.close()
+print("closed", flush=True)
+sys.stdin.readline()
+"""
+
+
+def _writer_process(bag: Path) -> subprocess.Popen:
+    proc = subprocess.Popen([sys.executable, "-c", _WRITER, str(bag)], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline() == "recording\n"
+    return proc
+
+
+def test_bag_being_recorded_is_not_repaired_or_verified(capsys, tmp_path):
+    """A bag whose writer is alive (it holds the flock of the bag's lock file): ``fourws bag
+    repair`` rewrote its file under the writer, it now refuses, as ``verify`` does, exit 2
+    and one line naming the bag and the writer's process; the file is untouched. Once the
+    writer closed the bag, its lock file is gone and verify reads it (50 states)."""
+    from fourws_run.bagfile import LOCK_FILE
+
+    bag = tmp_path / "live"
+    proc = _writer_process(bag)
+    try:
+        mcap = bag / "live.mcap"
+        before = mcap.read_bytes()
+        for action in ("repair", "verify"):
+            code, err = _cli(capsys, "bag", action, str(bag))
+            _one_line_error(code, err, "bag", f"bag {str(bag)!r} is being recorded (process "
+                            f"{proc.pid} holds {LOCK_FILE}); wait until its recording has "
+                            "ended")
+        assert mcap.read_bytes() == before and sorted(p.name for p in bag.iterdir()) == [
+            LOCK_FILE, "live.mcap"]
+        proc.stdin.write("\n")
+        proc.stdin.flush()
+        assert proc.stdout.readline() == "closed\n"
+        assert not (bag / LOCK_FILE).exists()
+        code = main(["bag", "verify", str(bag)])
+        out = capsys.readouterr().out
+        assert code == 1, out  # the verdict on a bag that carries no recording accounting
+        assert out == f"{bag}: readable, checksums ok, completeness unknown (the bag " \
+            "carries no recording accounting)\n", out
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+def test_bag_of_a_killed_writer_is_repaired_and_loses_its_stale_lock(capsys, tmp_path):
+    """SIGKILL releases the writer's flock (the kernel closes its files): the lock file left
+    in the folder does not stop ``repair``, which recovers the 50 flushed states and removes
+    it."""
+    from fourws_run.bagfile import LOCK_FILE
+
+    bag = tmp_path / "killed"
+    proc = _writer_process(bag)
+    proc.kill()
+    proc.wait()
+    assert (bag / LOCK_FILE).exists()
+    code = main(["bag", "repair", str(bag)])
+    out = capsys.readouterr().out
+    assert code == 1, out  # repaired: a bag without final status counts is incomplete
+    assert f"{bag}: repaired; recovered 50 messages (/fourws/state 50)" in out, out
+    assert not (bag / LOCK_FILE).exists()
+
+
 @pytest.mark.parametrize("dt", ["1e-9", "1e6", "nan", "-1"])
 def test_analyze_dt_bounds_one_line(capsys, small_bag, dt):
     code, err = _cli(capsys, "analyze", str(small_bag), "--quiet", "--no-sweep", f"--dt={dt}")
@@ -502,6 +617,46 @@ def test_report_folder_unwritable_one_line(capsys, small_bag, tmp_path):
     _one_line_error(code, err, "analyze", "Not a directory")
 
 
+@pytest.mark.parametrize("domain, needle", [
+    ("300", "ROS_DOMAIN_ID='300' is not a ROS domain ID (0..232)"),
+    ("-1", "ROS_DOMAIN_ID='-1' is not a ROS domain ID (0..232)"),
+    ("busy", "(from ROS_DOMAIN_ID) is used by another fourws run on this machine"),
+], ids=["300", "negative", "busy"])
+@pytest.mark.parametrize("command", ["run", "demo"])
+def test_unusable_ros_domain_is_bad_input_before_anything_is_created(
+        capsys, monkeypatch, tmp_path, domain, needle, command):
+    """``ROS_DOMAIN_ID=300`` (above ROS 2's 232 on Linux) left a FAILED run folder and exit
+    code 1: the environment is checked as domain_for_run checks it (the same function),
+    before the output folder exists; a domain another fourws run holds (here this test's
+    own lease) likewise."""
+    from fourws_ros.domains import reserve_domain_id
+
+    lease = reserve_domain_id() if domain == "busy" else None
+    try:
+        monkeypatch.setenv("ROS_DOMAIN_ID", str(lease.domain_id) if lease else domain)
+        code, err = _cli(capsys, command, "--out", str(tmp_path / "runs"))
+    finally:
+        if lease is not None:
+            lease.release()
+    _one_line_error(code, err, command, needle)
+    assert not (tmp_path / "runs").exists()
+
+
+def test_a_law_given_twice_is_refused(capsys, tmp_path):
+    """``--law fws --law fws`` ran fws twice (two run folders of one law), and so did a
+    scenario listing it twice: one line each, exit 2, before anything runs."""
+    code, err = _cli(capsys, "run", "--law", "fws", "--law", "sol1", "--law", "fws", "--out",
+                     str(tmp_path / "runs"))
+    _one_line_error(code, err, "run", "--law: 'fws' is given 2 times; each law runs once")
+    data = yaml.safe_load((SHIPPED / "scenarios" / "default.yaml").read_text())
+    data["laws"] = ["sol1", "sol1", "fws", "sol1"]
+    path = _write(tmp_path, data, "twice.yaml")
+    _refused(load_scenario, path, "laws", "'sol1' is listed 3 times; each law runs once")
+    code, err = _cli(capsys, "run", str(path), "--out", str(tmp_path / "runs"))
+    _one_line_error(code, err, "run", "laws: 'sol1' is listed 3 times", str(path))
+    assert not (tmp_path / "runs").exists()
+
+
 # ---------------------------------------------------------------------------------- nodes
 
 def _node(name: str, *ros_args: str) -> subprocess.CompletedProcess:
@@ -525,6 +680,79 @@ def test_node_params_file_missing_binary_or_duplicate(tmp_path):
         assert res.returncode == 2, res.stderr
         assert "Traceback" not in res.stderr
         assert len(ours) == 1 and str(path) in ours[0] and needle in ours[0], ours
+
+
+PARAMS = SHIPPED / "params" / "lockstep.yaml"
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_node_params_file_unknown_parameter_empty_or_without_section(tmp_path):
+    """rclpy ignores a file's parameters a node does not declare, and starts a node on an
+    empty file or one with no section for it: the simulator ran on with defaults. Each is
+    exit 2 and one error line naming the parameter (or the sections) and the file; other
+    nodes' sections of a shared file are not the simulator's business (the shipped file
+    holds four, and the misspelt key below sits in the simulator's own)."""
+    text = PARAMS.read_text()
+    assert text.count("    integrator: rk4\n") == 1
+    typo = _write(tmp_path, text.replace("    integrator: rk4\n", "    integrater: rk4\n"),
+                  "typo.yaml")
+    empty = _write(tmp_path, "# nothing here\n", "empty.yaml")
+    other = _write(tmp_path, "fourws_controller:\n  ros__parameters:\n    law: fws\n"
+                             "/**/fourws_maneuver:\n  ros__parameters:\n    vehicle: x\n",
+                   "other.yaml")
+    for path, needle in (
+            (typo, "integrater: not a parameter of node /fourws_simulator (under "
+                   "'fourws_simulator'; valid: autostart, clock_mode, "),
+            (empty, "<file>: is empty or not a ROS 2 parameter file"),
+            (other, "<file>: has no section for node /fourws_simulator (its sections: "
+                    "fourws_controller, /**/fourws_maneuver; /** is read by every node)")):
+        res = _node("simulator", "--params-file", str(path))
+        ours = [line for line in res.stderr.splitlines() if line.startswith("[fourws_")]
+        assert res.returncode == 2, res.stderr
+        assert "Traceback" not in res.stderr
+        assert len(ours) == 1 and ours[0].startswith("[fourws_simulator] error: ") \
+            and needle in ours[0] and ours[0].endswith(f" in {path}"), ours
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_node_params_file_wildcard_sections_still_work(tmp_path):
+    """The sections rcl applies by wildcard (``/**`` every node, ``/**/NAME`` a node in any
+    namespace) are this node's: the controller's shipped parameters under either start it
+    (as does the shipped file, whose other sections belong to the other nodes)."""
+    from config_mutation import classify_node
+
+    own = yaml.safe_load(PARAMS.read_text())["fourws_controller"]
+    for key in ("/**", "/**/fourws_controller"):
+        path = _write(tmp_path, {key: own}, "wildcard.yaml")
+        assert classify_node("controller", path, dict(os.environ), 60.0) == ("ok", ""), key
+    assert classify_node("controller", PARAMS, dict(os.environ), 60.0) == ("ok", "")
+    typo = _write(tmp_path, {"/**": {"ros__parameters": {**own["ros__parameters"],
+                                                         "belief_scale_frnt": 1.0}}},
+                  "wildcard_typo.yaml")
+    res = _node("controller", "--params-file", str(typo))
+    ours = [line for line in res.stderr.splitlines() if line.startswith("[fourws_")]
+    assert res.returncode == 2 and len(ours) == 1, res.stderr
+    assert "belief_scale_frnt: not a parameter of node /fourws_controller (under '/**'; " \
+        "valid: " in ours[0], ours
+
+
+@pytest.mark.parametrize("section, node, applies", [
+    ("/**", "/fourws_simulator", True), ("/**", "/ns/deep/fourws_simulator", True),
+    ("fourws_simulator", "/fourws_simulator", True),
+    ("/fourws_simulator", "/fourws_simulator", True),
+    ("/**/fourws_simulator", "/ns/fourws_simulator", True),
+    ("/**/fourws_simulator", "/fourws_simulator", True),
+    ("/*", "/fourws_simulator", True), ("/*", "/ns/fourws_simulator", False),
+    ("/ns/*", "/ns/fourws_simulator", True), ("fourws_simulator", "/ns/fourws_simulator", False),
+    ("fourws_controller", "/fourws_simulator", False), ("/fourws", "/fourws_simulator", False),
+])
+def test_params_file_sections_match_as_rcl_matches_them(section, node, applies):
+    """ROS 2 design article "ROS command line arguments": ``*`` matches one token between
+    slashes, ``**`` zero or more, no partial matches; a name without a leading slash is from
+    the root namespace."""
+    from fourws_ros.runtime import _section_matches
+
+    assert _section_matches(section, node) is applies
 
 
 @pytest.mark.usefixtures("ros_domain")

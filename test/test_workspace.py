@@ -175,13 +175,15 @@ def test_installed_nodes_run_a_lockstep_graph(workspace, ros_domain, tmp_path) -
 
 
 def test_colcon_test_runs_the_suite_and_reports_a_failure(workspace) -> None:
-    """``colcon test`` runs pytest on test/ (here two tests chosen with PYTEST_ADDOPTS, one
-    passing and one added that fails): the result holds both, one failed, and
-    ``colcon test-result`` exits non-zero."""
+    """``colcon test`` runs pytest on test/ (here three tests chosen with PYTEST_ADDOPTS: two
+    passing, one of them the check that the install is the sources, which runs only with the
+    install prefix the CTest registration hands it, and one added that fails): the result
+    holds the three, none skipped, one failed, and ``colcon test-result`` exits non-zero."""
     ws, env = workspace
     failing = ws / "src" / "fourws" / "test" / "test_zz_fails_on_purpose.py"
     failing.write_text("def test_fails_on_purpose():\n    assert 1 + 1 == 3\n")
-    selected = "test_checkout_folders_are_found or test_fails_on_purpose"
+    selected = ("test_checkout_folders_are_found or test_fails_on_purpose or "
+                "test_installed_python_packages_are_the_sources")
     env = {**env, "PYTEST_ADDOPTS": f"-p no:cacheprovider -k '{selected}'"}
     done = subprocess.run(["colcon", "test"], cwd=ws, env=env, capture_output=True, text=True,
                           timeout=TEST_TIMEOUT_S)
@@ -193,4 +195,5 @@ def test_colcon_test_runs_the_suite_and_reports_a_failure(workspace) -> None:
     xml = ws / "build" / "fourws" / "test_results" / "fourws" / "pytest.xunit.xml"
     suite = ET.parse(xml).getroot()
     suite = suite if suite.tag == "testsuite" else suite.find("testsuite")
-    assert (int(suite.get("tests")), int(suite.get("failures"))) == (2, 1)
+    assert (int(suite.get("tests")), int(suite.get("failures")),
+            int(suite.get("skipped", 0))) == (3, 1, 0)

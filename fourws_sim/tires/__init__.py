@@ -7,8 +7,11 @@ Every tire module exposes
 ``forces(fz_n, alpha_rad, kappa, vx_mps, mu, coeffs) -> (fx_n, fy_n, mz_nm)``
     tire-frame forces (plain float math: no Python objects, no exceptions inside);
 ``pack(vehicle, axle) -> numpy.ndarray``
-    the float64 coefficient array of one tire on ``"front"`` or ``"rear"`` (all validation of
-    coefficient names and values happens here);
+    the float64 coefficient array of one tire on ``"front"`` or ``"rear"``;
+``pack_mapping(values, source, prefix)`` (the tires with fitted coefficients, ``sti`` and
+    ``magic_formula``: the file's ``tire.<name>`` mapping)
+    the same from a file's coefficient mapping: all validation of coefficient names and
+    values happens here (the vehicle loader calls it, so every tool refuses a bad key);
 ``N_COEFFS`` and an ``IntEnum`` ``COEF`` naming the array slots.
 
 Sign conventions (``docs/architecture.md``): ``Fy = -C_alpha * alpha`` for small slip angle,
