@@ -140,8 +140,12 @@ import math, signal, sys, time
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from fourws_ros import topics
-from fourws_msgs.msg import (DriverInput, ManeuverStatus, RearSteerCommand, SimulatorStatus,
-                             VehicleState)
+try:
+    from fourws.msg import (DriverInput, ManeuverStatus, RearSteerCommand, SimulatorStatus,
+                            VehicleState)
+except ImportError:  # installations with the former interface package
+    from fourws_msgs.msg import (DriverInput, ManeuverStatus, RearSteerCommand,
+                                 SimulatorStatus, VehicleState)
 
 def set_stamp(stamp, t):
     sec = math.floor(t)
