@@ -97,18 +97,30 @@ class LauncherNode:
 
     def __init__(self, domain_id: int, config_json: str, writers: dict[Role, str],
                  state: RunState) -> None:
-        # the domain goes to rclpy.init; the process environment keeps the user's
-        # ROS_DOMAIN_ID (a later run in this process must see what the user set, not ours)
-        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-        for key in ("FASTDDS_DEFAULT_PROFILES_FILE",):
-            value = graph_env(domain_id).get(key)
-            if value and not os.environ.get(key):
-                os.environ[key] = value
-        self.context = Context()
-        rclpy.init(args=[], context=self.context, domain_id=domain_id,
-                   signal_handler_options=SignalHandlerOptions.NO)
-        self.node = rclpy.create_node(topics.NODE_NAMES[Role.LAUNCHER], context=self.context,
-                                      enable_rosout=False)
+        # the domain goes to rclpy.init; the run's discovery range and DDS profile are in the
+        # environment only while the participant is created: the process keeps the user's
+        # (a later run in this process, or the caller, must see what the user set, not ours)
+        run_env = graph_env(domain_id)
+        keys = ("ROS_AUTOMATIC_DISCOVERY_RANGE", "FASTDDS_DEFAULT_PROFILES_FILE",
+                "ROS_STATIC_PEERS")
+        saved = {key: os.environ.get(key) for key in keys}
+        try:
+            for key in keys:
+                if run_env.get(key):
+                    os.environ[key] = run_env[key]
+                else:
+                    os.environ.pop(key, None)
+            self.context = Context()
+            rclpy.init(args=[], context=self.context, domain_id=domain_id,
+                       signal_handler_options=SignalHandlerOptions.NO)
+            self.node = rclpy.create_node(topics.NODE_NAMES[Role.LAUNCHER],
+                                          context=self.context, enable_rosout=False)
+        finally:
+            for key, value in saved.items():
+                if value is None:
+                    os.environ.pop(key, None)
+                else:
+                    os.environ[key] = value
         # message info (publisher identity) needs the single-threaded executor
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)

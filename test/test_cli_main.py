@@ -69,7 +69,10 @@ def test_unknown_option_gives_the_subcommands_usage(capsys, command):
                        "--speed-kmh", "85"],
             "lqr-gains": ["--vehicle", "table_4_4"],
             "equilibria": ["--vehicle", "table_7_1_set_1", "--speed-mps", "20"],
-            "tire-curves": ["--vehicle", "table_8_1"]}.get(command, [])
+            "tire-curves": ["--vehicle", "table_8_1"],
+            "export": ["bag", "--format", "csv"],
+            "identify": ["log.csv", "--vehicle", "table_8_1"],
+            "validate": ["sim", "ref"]}.get(command, [])
     code, _, err = _run(capsys, command, *args, "--no-such-option")
     lines = err.strip().splitlines()
     assert code == 2, err

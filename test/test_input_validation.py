@@ -702,7 +702,7 @@ def test_node_params_file_unknown_parameter_empty_or_without_section(tmp_path):
                    "other.yaml")
     for path, needle in (
             (typo, "integrater: not a parameter of node /fourws_simulator (under "
-                   "'fourws_simulator'; valid: autostart, clock_mode, "),
+                   "'fourws_simulator'; valid: answer_timeout_s, autostart, clock_mode, "),
             (empty, "<file>: is empty or not a ROS 2 parameter file"),
             (other, "<file>: has no section for node /fourws_simulator (its sections: "
                     "fourws_controller, /**/fourws_maneuver; /** is read by every node)")):
