@@ -32,12 +32,14 @@ import json
 import math
 import os
 import sys
+import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Mapping
 
 from fourws_sim.config_yaml import plain_copy, read_yaml
 from fourws_sim.errors import ParameterError, UnknownNameError, describe
+from fourws_sim.tires import TIRES
 
 
 def find_resource_dir(beside: Path, package: str, sub: str, marker: str) -> Path:
@@ -584,17 +586,17 @@ class Tire:
     rolling_resistance: float = _spec("nonnegative", default=0.0,
                                       doc="f_r, rolling-resistance force per normal load",
                                       bounds=(0.0, 0.5))
+    #: Coefficients of a tire model, the field named after the model (``fourws_sim.tires``).
     sti: Mapping[str, float] = field(default_factory=dict)
     magic_formula: Mapping[str, float] = field(default_factory=dict)
     tmeasy: Mapping[str, Any] = field(default_factory=dict)
 
     def _check(self, source: str | None, prefix: str,
                unchecked: frozenset[str] = frozenset()) -> None:
-        valid = ("linear", "sti", "magic_formula", "tmeasy")
-        if self.model not in valid:
+        if self.model not in TIRES:
             raise ParameterError(f"{prefix}model", f"unknown tire model {describe(self.model)} "
-                                                   f"(valid: {', '.join(valid)})", source)
-        for group in ("sti", "magic_formula"):
+                                                   f"(valid: {', '.join(TIRES)})", source)
+        for group in TIRE_COEFFICIENT_GROUPS:
             values = getattr(self, group)
             if not isinstance(values, Mapping):
                 raise ParameterError(f"{prefix}{group}",
@@ -616,6 +618,14 @@ class Tire:
                 check_plausible(name, float(v), TIRE_COEFFICIENT_BOUNDS, source, unchecked)
         object.__setattr__(self, "tmeasy", _tmeasy_resolved(self.tmeasy, source,
                                                             f"{prefix}tmeasy.", unchecked))
+
+
+#: Tire models whose fitted coefficients a vehicle file gives as a ``tire.<model>`` mapping of
+#: numbers: the fields of :class:`Tire` of that type named after a model of
+#: ``fourws_sim.tires.TIRES`` (``tire.tmeasy`` is a validated :class:`TMeasy` block instead).
+TIRE_COEFFICIENT_GROUPS: tuple[str, ...] = tuple(
+    name for name, hint in typing.get_type_hints(Tire).items()
+    if name in TIRES and hint == Mapping[str, float])
 
 
 @dataclass(frozen=True)
@@ -824,7 +834,7 @@ def _vehicle_bounded_fields(data: Mapping[str, Any]) -> set[str]:
     names.update(bounded_fields(TMeasy, "tire.tmeasy."))
     tire = data.get("tire")
     if isinstance(tire, Mapping):
-        for group in ("sti", "magic_formula"):
+        for group in TIRE_COEFFICIENT_GROUPS:
             if isinstance(tire.get(group), Mapping):
                 names.update(f"tire.{group}.{k}" for k in tire[group])
     return names

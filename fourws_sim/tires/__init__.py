@@ -20,23 +20,32 @@ Sign conventions (``docs/architecture.md``): ``Fy = -C_alpha * alpha`` for small
 The argument ``mu`` is the road friction coefficient. For ``linear`` it is the absolute peak
 friction; ``sti``, ``magic_formula`` and ``tmeasy`` carry their own (load- and speed-dependent)
 peak friction measured on a test surface, and ``mu`` scales it (1.0 = the test surface).
+
+Optional, for the compiled kernels: ``forces4`` (the four wheels interleaved, for the 8-DOF
+kernels' speed) and ``forces_lane`` (branch-free, for the study's batch kernel in vector
+instructions, :mod:`fourws_sim.lanes`), each giving exactly the numbers of ``forces``.
+
+A new tire model is its module plus one line in :data:`TIRES` (and, if the vehicle file gives
+its coefficients as a ``tire.<name>`` mapping, that field of
+:class:`fourws_sim.params.Tire`); everything else takes the names from here.
 """
 
 from __future__ import annotations
 
+import importlib
 from types import ModuleType
 
 import numpy as np
 
 from fourws_sim.errors import UnknownNameError
-from fourws_sim.tires import linear, magic_formula, sti, tmeasy
 
-#: Registry of tire models, name -> module: ``TIRES["sti"].forces(...)``.
-TIRES: dict[str, ModuleType] = {
-    "linear": linear,
-    "sti": sti,
-    "magic_formula": magic_formula,
-    "tmeasy": tmeasy,
+#: The one list of tire models: name -> module, imported on first use by :func:`get_tire`
+#: (the tires bring numba; vehicle files, scenarios and nodes need only the names).
+TIRES: dict[str, str] = {
+    "linear": "fourws_sim.tires.linear",
+    "sti": "fourws_sim.tires.sti",
+    "magic_formula": "fourws_sim.tires.magic_formula",
+    "tmeasy": "fourws_sim.tires.tmeasy",
 }
 
 #: Step of the central difference used by :func:`cornering_stiffness`, rad.
@@ -46,17 +55,18 @@ _STIFFNESS_SPEED_MPS = 20.0
 
 
 def get_tire(name: str) -> ModuleType:
-    """Tire module by name.
+    """Tire module by name (``get_tire("sti").forces(...)``).
 
     Raises
     ------
     UnknownNameError
-        If ``name`` is not a key of :data:`TIRES`.
+        If ``name`` is not one of :data:`TIRES`.
     """
     try:
-        return TIRES[name]
-    except KeyError:
-        raise UnknownNameError("tire model", name, list(TIRES)) from None
+        target = TIRES[name]
+    except (KeyError, TypeError):
+        raise UnknownNameError("tire model", str(name), list(TIRES)) from None
+    return importlib.import_module(target)
 
 
 def cornering_stiffness(name: str, coeffs: np.ndarray, fz_n: float, mu: float = 1.0) -> float:
