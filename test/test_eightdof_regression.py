@@ -18,8 +18,6 @@ change of its initial speed is 4e-13 relative on that scale), and 1e-12 relative
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 import pytest
 
@@ -215,8 +213,7 @@ def test_trajectory_matches_the_pre_optimization_model(tire: str, maneuver: str)
 @pytest.mark.parametrize("tire", sorted(TIRE))
 def test_compiled_tire_matches_the_pre_optimization_model(tire: str) -> None:
     """Regression pin: the tire function compiled into the kernels gives the earlier forces."""
-    eightdof.kernels_for(tire)  # builds the variant module holding the compiled tire
-    compiled = sys.modules[f"fourws_sim.models.eightdof_kernels_{tire}"]._tire
+    compiled = eightdof.kernel_module(tire)._tire  # the variant module holds it
     p = eightdof.params_for(load_vehicle("table_8_1"), tire)
     got = np.array([compiled(fz, alpha, kappa, 20.0, mu, p.coeffs_front)
                     for fz, alpha, kappa, mu in POINTS])
@@ -227,8 +224,7 @@ def test_interleaved_sti_tires_equal_four_scalar_calls_exactly() -> None:
     """The 8-DOF kernels evaluate the STI tires of the four wheels interleaved (``forces4``):
     bit for bit the numbers of four ``forces`` calls (compiled and plain Python), so the
     speed-up cannot change a result."""
-    eightdof.kernels_for("sti")
-    kernels = sys.modules["fourws_sim.models.eightdof_kernels_sti"]
+    kernels = eightdof.kernel_module("sti")
     module = eightdof.params_for(load_vehicle("table_8_1"), "sti").tire
     cf = module.pack_mapping({})
     cr = module.pack_mapping({"fzt_lb": 900.0, "ka": 0.2})  # rear differs from the front

@@ -163,27 +163,32 @@ system's fastest rate (``PARAM.RATE_S``: :math:`\nu/J`, :math:`\sqrt{k/J}` with 
 stiffness :math:`k = 2(\partial M_z/\partial\alpha - e\,\partial F_y/\partial\alpha)` of the
 front tires at their static load, and :math:`1/\tau_b` with friction).
 
-Two implementations: :func:`derivatives` is the readable NumPy reference (the model contract);
-:func:`kernels_for` gives the numba-compiled right-hand side and fixed-step integrator loops
-for one tire function, which :mod:`fourws_sim.simulator` uses. ``test/test_eightdof.py`` checks
-they agree to round-off.
+Two implementations. :func:`kernels_for` gives the numba-compiled right-hand side and
+fixed-step integrator loops for one tire model: the equations are written once there, as
+branch-free functions of plain numbers that the simulator's scalar kernel and the study's
+kernel of many points at once both call (:mod:`fourws_sim.models.eightdof_kernels`); every
+simulation, study point and linearization runs them. :func:`evaluate` (:func:`derivatives`) is
+the readable NumPy reference, the test oracle (``test/test_eightdof.py`` checks they agree to
+round-off) and the right-hand side of the ``solve_ivp`` reference integrator. It stays a
+separate implementation: the branch-free form computes both sides of every choice and divides
+by zero on the side not taken (a wheel without friction capacity), which IEEE arithmetic in
+compiled code allows and plain Python does not.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from dataclasses import dataclass
-from pathlib import Path
 from enum import IntEnum
 from types import ModuleType
 from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
+from fourws_sim import variants
 from fourws_sim.errors import ParameterError
 from fourws_sim.params import GRAVITY_MPS2, Vehicle
+from fourws_sim.tires import get_tire
 
 
 class STATE(IntEnum):
@@ -406,8 +411,6 @@ def steering_wheel_angle(road_wheel_angle_rad: float, vehicle: Vehicle) -> float
 
 
 def _tire_module(vehicle: Vehicle, tire: str | None) -> tuple[str, ModuleType]:
-    from fourws_sim.tires import get_tire  # numba: the tires load it (about 0.5 s)
-
     name = tire if tire is not None else (vehicle.tire.model if vehicle.tire else "linear")
     return name, get_tire(name)
 
@@ -651,7 +654,8 @@ def _steering_rates(rate: float, torque_nm: float, fy_front: np.ndarray, mz_fron
 
 
 def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndarray, Aux]:
-    """State derivative and per-wheel quantities (NumPy reference; see the module docstring).
+    """State derivative and per-wheel quantities (NumPy reference and test oracle of the
+    compiled kernels; see the module docstring).
 
     Parameters
     ----------
@@ -835,19 +839,27 @@ class Kernels(NamedTuple):
 
 
 _KERNEL_CACHE: dict[str, Kernels] = {}
-#: The kernel source, loaded by file (it imports this module's slots: never the reverse).
-_KERNELS_MODULE = f"{__package__}.eightdof_kernels"
-_KERNELS_FILE = Path(__file__).with_name("eightdof_kernels.py")
+#: The kernels' template (:mod:`fourws_sim.variants`: compiled once per tire model; it imports
+#: this module's slots, never the reverse).
+KERNELS_TEMPLATE = f"{__package__}.eightdof_kernels"
+
+
+def kernel_module(tire_name: str) -> ModuleType:
+    """The variant module of :mod:`fourws_sim.models.eightdof_kernels` for tire model
+    ``tire_name`` (:func:`fourws_sim.variants.load`: built once per process, compiled at first
+    call and cached on disk by numba).
+
+    Raises
+    ------
+    UnknownNameError
+        If ``tire_name`` is not a known tire model.
+    """
+    return variants.load(KERNELS_TEMPLATE, tire_name)
 
 
 def kernels_for(tire_name: str) -> Kernels:
-    """Compiled kernels for the tire model ``tire_name`` (one variant per tire, built once per
-    process and cached on disk by numba).
-
-    The kernel source :mod:`fourws_sim.models.eightdof_kernels` is loaded once per tire under
-    its own module name with the tire's ``forces`` as a module global, so each variant calls
-    its tire directly (inlined by LLVM) and numba's on-disk cache keeps one entry per variant
-    (a closure over a dispatcher would miss the cache in every new process).
+    """Compiled kernels for the tire model ``tire_name`` (:func:`kernel_module`), each
+    variant calling its tire directly (inlined by LLVM).
 
     Raises
     ------
@@ -855,18 +867,7 @@ def kernels_for(tire_name: str) -> Kernels:
         If ``tire_name`` is not a known tire model.
     """
     if tire_name not in _KERNEL_CACHE:
-        from fourws_sim.tires import get_tire  # numba: the tires load it (about 0.5 s)
-
-        get_tire(tire_name)  # raise UnknownNameError before building anything
-        name = f"{_KERNELS_MODULE}_{tire_name}"
-        module = sys.modules.get(name)
-        if module is None:
-            spec = importlib.util.spec_from_file_location(name, _KERNELS_FILE)
-            assert spec is not None and spec.loader is not None
-            module = importlib.util.module_from_spec(spec)
-            module.TIRE_NAME = tire_name  # type: ignore[attr-defined]
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
+        module = kernel_module(tire_name)
         _KERNEL_CACHE[tire_name] = Kernels(module.rhs, module.rk4, module.euler)
     return _KERNEL_CACHE[tire_name]
 
@@ -881,8 +882,7 @@ def lane_kernels_for(tire_name: str) -> Any:
     UnknownNameError
         If ``tire_name`` is not a known tire model.
     """
-    kernels_for(tire_name)  # loads the variant module
-    module = sys.modules[f"{_KERNELS_MODULE}_{tire_name}"]
+    module = kernel_module(tire_name)
     return module if module.HAS_LANES else None
 
 

@@ -2,11 +2,32 @@
 # SPDX-License-Identifier: Apache-2.0
 """Numba kernels of the 8-DOF model (right-hand side, RK4 and Euler loops) for one tire model.
 
-The equations are those of :mod:`fourws_sim.models.eightdof` (see its docstring), written as
-scalar loops without allocation. Do not import this module directly: use
-:func:`fourws_sim.models.eightdof.kernels_for`, which loads this file once per tire model
-under its own module name with ``TIRE_NAME`` set, so every tire gets its own compiled (and
-disk-cached) variant with the tire function inlined.
+The equations are those of :mod:`fourws_sim.models.eightdof` (see its docstring). This file is
+a template of :mod:`fourws_sim.variants`: :func:`fourws_sim.models.eightdof.kernels_for` loads
+it once per tire model (``fourws_sim.models.eightdof_kernels[sti]``, ...), so every tire gets
+its own compiled (and disk-cached) variant with the tire function inlined.
+
+The equations, once
+-------------------
+Each piece of the model is one function of plain numbers, without branches and without any
+memory layout: :func:`_wheel_loads` (normal loads), :func:`_corner_slip` (a corner's wheel
+kinematics, slips and slip lag), :func:`_corner_spin` (its forces in the body frame, their
+moment and the wheel's spin equation), :func:`_body_rates` (the body's equations of motion,
+pose and load-transfer lag). Between a corner's slip and spin comes its tire. Two right-hand
+sides call them, differing only in where the numbers are stored:
+
+* :func:`rhs` (scalar: one state, the simulator's, ``Kernels.rhs``/``rk4``/``euler``): arrays
+  in :class:`~fourws_sim.models.eightdof.STATE`, ``INPUT`` and ``PARAM`` order; it also has
+  the free steering system;
+* :func:`rhs_lanes` (the study's batch kernel: ``LANES`` states side by side in the layout of
+  :mod:`fourws_sim.lanes`, a loop over lanes that compiles to vector instructions; the
+  fixed-control 8-DOF with a tire that has ``forces_lane``).
+
+A branch is a choice between computed values under the same test, so both give the same
+numbers bit for bit (``test_eightdof_regression``); numba compiles with IEEE division, where a
+value not chosen may be an infinity. The plain-Python reference
+:func:`fourws_sim.models.eightdof.evaluate` cannot run these functions for that reason (its
+division by a zero friction capacity would raise) and is the test oracle.
 
 Speed (the simulator runs RK4 at 1 ms many times faster than real time): the right-hand side
 is inlined into the RK4 loop at one call site, and it evaluates the four tires back to
@@ -19,22 +40,20 @@ checks bit equality). Parameter-only terms are computed once per kernel call, an
 by parameters are multiplications by their reciprocals: the results equal the plain scalar
 code's to round-off (``test_eightdof_regression`` pins trajectories of the model to 1e-12).
 
-Sub-steps: ``rhs`` also reports the rate of the fastest slip mode (aux slot ``_AUX_RATE``);
-the RK4 and Euler loops read it from their first stage and, where the step is too long for it
-(a light or slowly rolling wheel), take the step in ``eightdof.substeps`` equal sub-steps in a
-separate compiled function. In normal driving the arithmetic is that of a plain step, bit for
-bit, and the check costs a comparison per step.
+Sub-steps: the right-hand side also reports the rate of the fastest slip mode (aux slot
+``_AUX_RATE``); the RK4 and Euler loops read it from their first stage and, where the step is
+too long for it (a light or slowly rolling wheel), take the step in ``eightdof.substeps``
+equal sub-steps in a separate compiled function. In normal driving the arithmetic is that of a
+plain step, bit for bit, and the check costs a comparison per step. One RK4 step is written
+once (:func:`_rk4_step`, over flat arrays, its right-hand side a parameter of
+:func:`_rk4_stepper`): the simulator's loop, its sub-steps and the lanes take it.
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
-import types
-from pathlib import Path
 from typing import Any
 
-import numba
 import numpy as np
 
 from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA_F,
@@ -43,13 +62,13 @@ from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA
                                         HELD_SPIN_FLOOR_RADPS, INPUT, MAX_SUBSTEPS, N_AUX,
                                         N_INPUT, N_STATE, PARAM, RK4_RATE_BOUND, STATE)
 from fourws_sim.models import eightdof
-from fourws_sim import lanes, trig
+from fourws_sim import lanes, trig, variants
 from fourws_sim.tires import get_tire
 from fourws_sim.lanes import LANES
 from fourws_sim.trig import atan, sincos
 
-#: Tire model of this variant (set by ``kernels_for`` before the module body runs).
-TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
+#: Tire model of this variant (:func:`fourws_sim.variants.tire_of` its module name).
+TIRE_NAME: str = variants.tire_of(__name__)
 
 #: numba options: IEEE division semantics (no Python ZeroDivisionError checks: halves the
 #: cost of the tire). No fast-math flags: with {contract, reassoc, arcp, nsz} LLVM folds
@@ -57,51 +76,12 @@ TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
 JIT_OPTIONS: dict[str, Any] = {"error_model": "numpy"}
 
 _TIRE_MODULE = get_tire(TIRE_NAME)
-
-
-def _source_digest() -> str:
-    """Short hash of everything this variant's compiled code depends on: this file, the JIT
-    options, the model module (state/input/parameter slots are frozen in as constants) and the
-    tire module (its code is linked in). numba only checks the stamp of a function's own file
-    and does not key its cache on compile options, so without this an edited tire or model, or
-    a tire compiled earlier with other options (its cache lives beside the tire module), would
-    silently run from a stale cache."""
-    digest = hashlib.sha1()
-    digest.update(Path(__file__).read_bytes())
-    digest.update(repr(sorted(JIT_OPTIONS.items())).encode())
-    for module in (eightdof, trig, lanes, _TIRE_MODULE):
-        digest.update(Path(module.__file__).read_bytes())  # type: ignore[arg-type]
-    return digest.hexdigest()[:12]
-
-
-_VARIANT = f"{TIRE_NAME}_{_source_digest()}"
-
-
-def _variant_copy(func: Any) -> Any:
-    """A copy of ``func`` named for this variant (``rhs_sti_<digest>``, ...).
-
-    numba names its cache files after the source file and the function's qualified name and
-    does not key them on globals or options, so each variant gets its own qualified name --
-    otherwise the variants would share (and load) one cache entry, and an edit of the tire or
-    model module or of the options would not invalidate it. A copy, so that the tire module's
-    own function keeps its name.
-    """
-    copy = types.FunctionType(func.__code__, func.__globals__, func.__name__,
-                              func.__defaults__, func.__closure__)
-    copy.__qualname__ = f"{func.__name__}_{_VARIANT}"
-    copy.__doc__ = func.__doc__
-    return copy
-
-
-def _jit(func: Any) -> Any:
-    """Compile ``func`` for this tire variant (disk-cached under the variant's name)."""
-    return numba.njit(cache=True, **JIT_OPTIONS)(_variant_copy(func))
-
-
-def _jit_inline(func: Any) -> Any:
-    """Compile ``func`` to be inlined (numba IR level) into the kernels that call it."""
-    return numba.njit(inline="always", **JIT_OPTIONS)(func)
-
+#: What this variant compiles in besides this file: the model module (state, input and
+#: parameter slots are frozen in as constants), sin/cos/atan, the lane layout and the tire.
+VARIANT = variants.Variant(__file__, TIRE_NAME, (eightdof, trig, lanes, _TIRE_MODULE),
+                           JIT_OPTIONS)
+_jit = VARIANT.jit
+_jit_inline = VARIANT.inline
 
 #: The tire's ``forces`` as compiled into this variant (also callable from Python). Called,
 #: not inlined, by ``rhs``: inlining the Magic Formula saves 4 % of the time of a step but
@@ -200,6 +180,147 @@ _P_L, _P_HALF_M, _P_RCF, _P_HUF, _P_RCR, _P_HUR, _P_STF, _P_STR = 0, 1, 2, 3, 4,
 _P_MSH, _P_MSHG, _P_KPHI, _P_CPHI, _P_IXZ2 = 8, 9, 10, 11, 12
 _P_INV_L, _P_INV_TF, _P_INV_TR, _P_INV_SIGMA_F, _P_INV_IW = 13, 14, 15, 16, 17
 _P_INV_M, _P_INV_IZ, _P_INV_TLT, _P_INV_SIGMA_R = 18, 19, 20, 21
+#: Number of the parameter terms.
+N_PT = _P_INV_SIGMA_R + 1
+
+
+# ------------------------------------------------------------------------------ equations
+# Plain numbers in, plain numbers out: no branch, no array (see the module docstring).
+
+def _wheel_loads(phi, pr, ax_lt, ay_lt, half_m, h_cg, inv_l,  # type: ignore
+                 k_phi_f, c_phi_f, rc_f, hu_f, inv_tf, k_phi_r, c_phi_r, rc_r, hu_r, inv_tr,
+                 static_f, static_r):
+    """Normal loads FL, FR, RL, RR (N, before the clamp at 0): static, longitudinal and
+    lateral transfer (Figures 8.3, 8.4) from the roll state and the lagged accelerations."""
+    d_long = half_m * ax_lt * h_cg * inv_l
+    d_lat_f = (k_phi_f * phi + c_phi_f * pr + rc_f * ay_lt + hu_f * ay_lt) * inv_tf
+    d_lat_r = (k_phi_r * phi + c_phi_r * pr + rc_r * ay_lt + hu_r * ay_lt) * inv_tr
+    return ((static_f - d_long) - d_lat_f, (static_f - d_long) + d_lat_f,
+            (static_r + d_long) - d_lat_r, (static_r + d_long) + d_lat_r)
+
+
+def _corner_slip(fz, U, V, r, xw, yw, cd, sd, omega, alpha_lag,  # type: ignore
+                 inv_sigma, rw, vmin, k_spin, rate):
+    """One corner's wheel kinematics (eqs. 8.34-8.46): the wheel at ``(xw, yw)`` (m) steered
+    by the angle of cosine ``cd`` and sine ``sd``, spinning at ``omega`` (rad/s), with the
+    lagged slip angle ``alpha_lag`` (rad) of its relaxation length (``inv_sigma`` 1/m, 0 for
+    none). Returns its load clamped at 0 (N), the slip angle its tire sees (rad), the slip
+    ratio, the wheel's forward speed |v_x| (m/s), the slip lag's derivative (rad/s) and the
+    larger of ``rate`` and its slip modes' rates (1/s, the sub-steps')."""
+    fz = 0.0 if fz < 0.0 else fz
+    vxb = U - r * yw
+    vyb = V + r * xw
+    vx = vxb * cd + vyb * sd
+    vy = -vxb * sd + vyb * cd
+    avx = abs(vx)
+    den = avx if avx > vmin else vmin
+    inv_den = 1.0 / den  # den >= v_min > 0
+    alpha = atan(vy * inv_den)  # atan2(vy, den) without the quadrant logic
+    kappa = (omega * rw - vx) * inv_den
+    lagged = inv_sigma > 0.0
+    lag_rate = den * inv_sigma
+    d_alpha = lag_rate * (alpha - alpha_lag) if lagged else 0.0
+    alpha_t = alpha_lag if lagged else alpha
+    rate = lag_rate if (lagged and lag_rate > rate) else rate
+    spin_rate = k_spin * inv_den
+    rate = spin_rate if spin_rate > rate else rate
+    return fz, alpha_t, kappa, avx, d_alpha, rate
+
+
+def _corner_spin(fx, fy, mz, fz, omega, xw, yw, cd, sd, drive, brake,  # type: ignore
+                 rw, iw, inv_iw, tau_b, f_rr):
+    """One corner's tire forces ``fx, fy`` (N, tire frame) and aligning moment ``mz`` (N m)
+    in the body frame (eqs. 8.9-8.13) and the wheel's spin acceleration (eqs. 8.5-8.8, the
+    stick-slip friction of brake ``brake`` and rolling resistance of the eightdof docstring).
+    Returns ``(fx_body, fy_body, moment about the CG, d omega/dt)``."""
+    fxb = fx * cd - fy * sd
+    fyb = fx * sd + fy * cd
+    moment = xw * fyb - yw * fxb + mz
+    brake = 0.0 if brake < 0.0 else brake
+    cap = brake + f_rr * fz * rw
+    t_other = drive - rw * fx
+    sliding = iw * abs(omega) >= cap * tau_b  # Coulomb friction opposes the spin
+    t_slide = (t_other - cap if omega > 0.0 else
+               (t_other + cap if omega < 0.0 else t_other))
+    held = -omega / tau_b * (1.0 - abs(t_other) / cap)  # stuck band: decays to zero
+    d_omega = (t_slide * inv_iw if sliding else
+               ((t_other - cap) * inv_iw if t_other > cap else  # breaking loose
+                ((t_other + cap) * inv_iw if t_other < -cap else
+                 (held if abs(omega) > HELD_FLOOR else 0.0))))
+    return fxb, fyb, moment, d_omega
+
+
+def _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, psi,  # type: ignore
+                ax_lt, ay_lt, m, ix, ixz, msh, msh_g, k_phi, c_phi, ixz2, inv_m, inv_iz,
+                inv_tlt):
+    """The body's equations of motion (eqs. 8.1-8.4, 8.14: the 3x3 system in V', r', p'
+    solved in closed form, then U'), the pose rates (8.15-8.17) and the lag of the
+    load-transfer accelerations, from the summed forces ``sum_fx, sum_fy`` (N) and yaw
+    moment ``sum_n`` (N m). Returns ``(U', V', r', p', ax, ay, X', Y', ax_lt', ay_lt')``."""
+    s, c = sincos(phi)
+    mshc = msh * c
+    rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
+    rhs_l = mshc * U * r + msh_g * s - k_phi * phi - c_phi * pr
+    det = ix - mshc * mshc * inv_m - ixz2
+    pd = (rhs_l + mshc * rhs_y * inv_m + ixz * sum_n * inv_iz) / det
+    vd = (rhs_y + mshc * pd) * inv_m
+    rd = (sum_n + ixz * pd) * inv_iz
+    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
+    ax = ud - V * r
+    ay = vd + U * r
+    sps, cps = sincos(psi)
+    return (ud, vd, rd, pd, ax, ay, U * cps - V * sps, U * sps + V * cps,
+            (ax - ax_lt) * inv_tlt, (ay - ay_lt) * inv_tlt)
+
+
+_wheel_loads = _jit_inline(_wheel_loads)
+_corner_slip = _jit_inline(_corner_slip)
+_corner_spin = _jit_inline(_corner_spin)
+_body_rates = _jit_inline(_body_rates)
+
+
+# ------------------------------------------------------------------------------ scalar
+
+def _corner_geometry(i, a, b, tf, tr, cdf, sdf, cdr, sdr):  # type: ignore[no-untyped-def]
+    """Position (m) and steer cosine and sine of corner ``i`` (FL, FR, RL, RR)."""
+    front = i < 2
+    xw = a if front else -b
+    half_track = 0.5 * tf if front else 0.5 * tr
+    yw = half_track if (i == 0 or i == 2) else -half_track
+    return xw, yw, (cdf if front else cdr), (sdf if front else sdr)
+
+
+_corner_geometry = _jit_inline(_corner_geometry)
+
+
+def _steering_rates(x, u, q, aux):  # type: ignore[no-untyped-def]
+    """``(d delta_s/dt, d^2 delta_s/dt^2)`` of the free steering system (eightdof docstring),
+    stick-slip as the wheels."""
+    rate_s = x[i_dsr]
+    e_s = q[k_es]
+    t_s = (q[k_ns] * u[j_tq] + ((aux[a_mz] - e_s * aux[a_fy])
+                                + (aux[a_mz + 1] - e_s * aux[a_fy + 1]))
+           - q[k_nus] * rate_s)
+    cap_s = q[k_tcs]
+    j_s = q[k_js]
+    if j_s * abs(rate_s) >= cap_s * q[k_tb]:
+        if rate_s > 0.0:
+            t_s -= cap_s
+        elif rate_s < 0.0:
+            t_s += cap_s
+        acc_s = t_s / j_s
+    elif t_s > cap_s:
+        acc_s = (t_s - cap_s) / j_s
+    elif t_s < -cap_s:
+        acc_s = (t_s + cap_s) / j_s
+    elif abs(rate_s) > HELD_FLOOR:
+        acc_s = -rate_s / q[k_tb] * (1.0 - abs(t_s) / cap_s)
+    else:
+        acc_s = 0.0
+    return rate_s, acc_s
+
+
+_steering_rates = _jit_inline(_steering_rates)
 
 
 def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
@@ -209,92 +330,34 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     r = x[i_r]
     phi = x[i_phi]
     pr = x[i_p]
-    psi = x[i_psi]
-    m = q[k_m]
     a = q[k_a]
     b = q[k_b]
     tf = q[k_tf]
     tr = q[k_tr]
     rw = q[k_rw]
-    iw = q[k_iw]
-    inv_iw = pt[_P_INV_IW]
-    vmin = q[k_vmin]
-    k_spin = q[k_kspin]
-    mu = q[k_mu]
     free = q[k_sfree] > 0.0  # free steering system: its angle replaces the command
-    if free:
-        delta_f = x[i_ds] + q[k_ef] * phi
-    else:
-        delta_f = u[j_df] + q[k_ef] * phi
+    delta_f = (x[i_ds] if free else u[j_df]) + q[k_ef] * phi
     delta_r = u[j_dr] + q[k_er] * phi
     ax_lt = x[i_ax]
     ay_lt = x[i_ay]
-    d_long = pt[_P_HALF_M] * ax_lt * q[k_hcg] * pt[_P_INV_L]
-    d_lat_f = ((q[k_kf] * phi + q[k_cf] * pr + pt[_P_RCF] * ay_lt + pt[_P_HUF] * ay_lt)
-               * pt[_P_INV_TF])
-    d_lat_r = ((q[k_kr] * phi + q[k_cr] * pr + pt[_P_RCR] * ay_lt + pt[_P_HUR] * ay_lt)
-               * pt[_P_INV_TR])
-    st_f = pt[_P_STF]
-    st_r = pt[_P_STR]
+    aux[a_fz], aux[a_fz + 1], aux[a_fz + 2], aux[a_fz + 3] = _wheel_loads(
+        phi, pr, ax_lt, ay_lt, pt[_P_HALF_M], q[k_hcg], pt[_P_INV_L], q[k_kf], q[k_cf],
+        pt[_P_RCF], pt[_P_HUF], pt[_P_INV_TF], q[k_kr], q[k_cr], pt[_P_RCR], pt[_P_HUR],
+        pt[_P_INV_TR], pt[_P_STF], pt[_P_STR])
     sdf, cdf = sincos(delta_f)
     sdr, cdr = sincos(delta_r)
-    sum_fx = 0.0
-    sum_fy = 0.0
-    sum_n = 0.0
     rate = 0.0  # fastest slip mode, 1/s (sets the integrators' sub-steps)
     # wheel kinematics of the four wheels, then the four tires back to back (independent:
     # their latency chains overlap), then the wheel spin equations and the force sums (in
-    # wheel order, as before)
+    # wheel order)
     for i in range(4):
-        if i < 2:
-            xw = a
-            cd = cdf
-            sd = sdf
-            fz = st_f - d_long
-            dl = d_lat_f
-            yw = 0.5 * tf
-            inv_sigma = pt[_P_INV_SIGMA_F]  # 0 where the axle has no tire lag
-        else:
-            xw = -b
-            cd = cdr
-            sd = sdr
-            fz = st_r + d_long
-            dl = d_lat_r
-            yw = 0.5 * tr
-            inv_sigma = pt[_P_INV_SIGMA_R]
-        if i == 0 or i == 2:
-            fz -= dl
-        else:
-            fz += dl
-            yw = -yw
-        if fz < 0.0:
-            fz = 0.0
-        vxb = U - r * yw
-        vyb = V + r * xw
-        vx = vxb * cd + vyb * sd
-        vy = -vxb * sd + vyb * cd
-        avx = abs(vx)
-        den = avx if avx > vmin else vmin
-        inv_den = 1.0 / den  # den >= v_min > 0
-        alpha = atan(vy * inv_den)  # atan2(vy, den) without the quadrant logic
-        kappa = (x[i_w0 + i] * rw - vx) * inv_den
-        if inv_sigma > 0.0:
-            al_lag = x[i_al0 + i]
-            lag_rate = den * inv_sigma
-            dx[i_al0 + i] = lag_rate * (alpha - al_lag)
-            alpha_t = al_lag
-            if lag_rate > rate:
-                rate = lag_rate
-        else:
-            dx[i_al0 + i] = 0.0
-            alpha_t = alpha
-        spin_rate = k_spin * inv_den
-        if spin_rate > rate:
-            rate = spin_rate
-        aux[a_fz + i] = fz
-        aux[a_al + i] = alpha_t
-        aux[a_ka + i] = kappa
+        xw, yw, cd, sd = _corner_geometry(i, a, b, tf, tr, cdf, sdf, cdr, sdr)
+        (aux[a_fz + i], aux[a_al + i], aux[a_ka + i], avx, dx[i_al0 + i],
+         rate) = _corner_slip(aux[a_fz + i], U, V, r, xw, yw, cd, sd, x[i_w0 + i],
+                              x[i_al0 + i], pt[_P_INV_SIGMA_F] if i < 2 else pt[_P_INV_SIGMA_R],
+                              rw, q[k_vmin], q[k_kspin], rate)
         dx[i_w0 + i] = avx  # scratch until the spin equations below overwrite it
+    mu = q[k_mu]
     if HAS_FORCES4:
         _forces4(aux[a_fz:a_fz + 4], aux[a_al:a_al + 4], aux[a_ka:a_ka + 4],
                  dx[i_w0:i_w0 + 4], mu, cf, cr, aux[a_fx:a_fx + 4], aux[a_fy:a_fy + 4],
@@ -307,103 +370,31 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
             aux[a_fx + i] = fx
             aux[a_fy + i] = fy
             aux[a_mz + i] = mz
+    sum_fx = 0.0
+    sum_fy = 0.0
+    sum_n = 0.0
     for i in range(4):
-        if i < 2:
-            xw = a
-            cd = cdf
-            sd = sdf
-            yw = 0.5 * tf
-        else:
-            xw = -b
-            cd = cdr
-            sd = sdr
-            yw = 0.5 * tr
-        if i == 1 or i == 3:
-            yw = -yw
-        fz = aux[a_fz + i]
-        fx = aux[a_fx + i]
-        fy = aux[a_fy + i]
-        mz = aux[a_mz + i]
-        om = x[i_w0 + i]
-        fxb = fx * cd - fy * sd
-        fyb = fx * sd + fy * cd
+        xw, yw, cd, sd = _corner_geometry(i, a, b, tf, tr, cdf, sdf, cdr, sdr)
+        fxb, fyb, moment, dx[i_w0 + i] = _corner_spin(
+            aux[a_fx + i], aux[a_fy + i], aux[a_mz + i], aux[a_fz + i], x[i_w0 + i], xw, yw,
+            cd, sd, u[j_d0 + i], u[j_b0 + i], rw, q[k_iw], pt[_P_INV_IW], q[k_tb], q[k_frr])
         sum_fx += fxb
         sum_fy += fyb
-        sum_n += xw * fyb - yw * fxb + mz
-        brake = u[j_b0 + i]
-        if brake < 0.0:
-            brake = 0.0
-        cap = brake + q[k_frr] * fz * rw
-        t_other = u[j_d0 + i] - rw * fx
-        if iw * abs(om) >= cap * q[k_tb]:  # sliding: Coulomb friction
-            if om > 0.0:
-                t_other -= cap
-            elif om < 0.0:
-                t_other += cap
-            dx[i_w0 + i] = t_other * inv_iw
-        elif t_other > cap:  # stuck band, breaking loose forwards
-            dx[i_w0 + i] = (t_other - cap) * inv_iw
-        elif t_other < -cap:  # stuck band, breaking loose backwards
-            dx[i_w0 + i] = (t_other + cap) * inv_iw
-        elif abs(om) > HELD_FLOOR:  # stuck band, held: the spin decays to zero
-            dx[i_w0 + i] = -om / q[k_tb] * (1.0 - abs(t_other) / cap)
-        else:
-            dx[i_w0 + i] = 0.0
-    if free:  # the steering system (eightdof docstring), stick-slip as the wheels above
-        rate_s = x[i_dsr]
-        e_s = q[k_es]
-        t_s = (q[k_ns] * u[j_tq] + ((aux[a_mz] - e_s * aux[a_fy])
-                                    + (aux[a_mz + 1] - e_s * aux[a_fy + 1]))
-               - q[k_nus] * rate_s)
-        cap_s = q[k_tcs]
-        j_s = q[k_js]
-        if j_s * abs(rate_s) >= cap_s * q[k_tb]:
-            if rate_s > 0.0:
-                t_s -= cap_s
-            elif rate_s < 0.0:
-                t_s += cap_s
-            acc_s = t_s / j_s
-        elif t_s > cap_s:
-            acc_s = (t_s - cap_s) / j_s
-        elif t_s < -cap_s:
-            acc_s = (t_s + cap_s) / j_s
-        elif abs(rate_s) > HELD_FLOOR:
-            acc_s = -rate_s / q[k_tb] * (1.0 - abs(t_s) / cap_s)
-        else:
-            acc_s = 0.0
-        dx[i_ds] = rate_s
-        dx[i_dsr] = acc_s
+        sum_n += moment
+    if free:
+        dx[i_ds], dx[i_dsr] = _steering_rates(x, u, q, aux)
         if q[k_rates] > rate:
             rate = q[k_rates]
     else:
         dx[i_ds] = 0.0
         dx[i_dsr] = 0.0
-    s, c = sincos(phi)
-    msh = pt[_P_MSH]
-    mshc = msh * c
-    ixz = q[k_ixz]
-    rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
-    rhs_l = mshc * U * r + pt[_P_MSHG] * s - pt[_P_KPHI] * phi - pt[_P_CPHI] * pr
-    inv_m = pt[_P_INV_M]
-    inv_iz = pt[_P_INV_IZ]
-    det = q[k_ix] - mshc * mshc * inv_m - pt[_P_IXZ2]
-    pd = (rhs_l + mshc * rhs_y * inv_m + ixz * sum_n * inv_iz) / det
-    vd = (rhs_y + mshc * pd) * inv_m
-    rd = (sum_n + ixz * pd) * inv_iz
-    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
-    ax = ud - V * r
-    ay = vd + U * r
-    dx[i_u] = ud
-    dx[i_v] = vd
-    dx[i_r] = rd
+    (dx[i_u], dx[i_v], dx[i_r], dx[i_p], ax, ay, dx[i_x], dx[i_y], dx[i_ax],
+     dx[i_ay]) = _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, x[i_psi], ax_lt, ay_lt,
+                             q[k_m], q[k_ix], q[k_ixz], pt[_P_MSH], pt[_P_MSHG], pt[_P_KPHI],
+                             pt[_P_CPHI], pt[_P_IXZ2], pt[_P_INV_M], pt[_P_INV_IZ],
+                             pt[_P_INV_TLT])
     dx[i_phi] = pr
-    dx[i_p] = pd
-    sps, cps = sincos(psi)
-    dx[i_x] = U * cps - V * sps
-    dx[i_y] = U * sps + V * cps
     dx[i_psi] = r
-    dx[i_ax] = (ax - ax_lt) * pt[_P_INV_TLT]
-    dx[i_ay] = (ay - ay_lt) * pt[_P_INV_TLT]
     aux[a_df] = delta_f
     aux[a_dr] = delta_r
     aux[a_ax] = ax
@@ -423,9 +414,81 @@ _rhs_inline = _jit_inline(_rhs_terms)
 _rhs_called = _jit(_rhs_terms)
 rhs = _jit(_rhs)
 
+
+# ------------------------------------------------------------------------------ integrators
+# Over flat arrays of ``n`` numbers: one state (n = N_STATE) or the lanes' states
+# (n = N_STATE * LANES), the same operations in the same order for each number.
+
+def _advance(x, k, h, out, n):  # type: ignore[no-untyped-def]
+    """``out = x + h k``."""
+    for j in range(n):
+        out[j] = x[j] + h * k[j]
+
+
+def _rk4_sum(x, k1, k2, k3, k4, sixth, out, n):  # type: ignore[no-untyped-def]
+    """``out = x + (h/6)(k1 + 2 k2 + 2 k3 + k4)`` with ``sixth = h/6``."""
+    for j in range(n):
+        out[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+
+
+def _accept(x, xt, n):  # type: ignore[no-untyped-def]
+    """Copy ``xt`` into ``x`` if every number is finite; whether it was."""
+    for j in range(n):
+        if not math.isfinite(xt[j]):
+            return False
+    for j in range(n):
+        x[j] = xt[j]
+    return True
+
+
+def _substeps(rate, dt_over_bound):  # type: ignore[no-untyped-def]
+    """Sub-steps for the slip rate ``rate`` (1/s): ``eightdof.substeps`` (1 when
+    ``rate dt <= bound``; a NaN rate gives 1 and the step's finiteness check reports it)."""
+    ratio = rate * dt_over_bound
+    if not ratio > 1.0:
+        return 1
+    if not ratio < MAX_SUB:
+        return MAX_SUB
+    return int(math.ceil(ratio))
+
+
+_advance = _jit_inline(_advance)
+_rk4_sum = _jit_inline(_rk4_sum)
+_accept = _jit_inline(_accept)
+_substeps_inline = _jit_inline(_substeps)
+
 #: Rows of the integrators' work array: the four RK4 stage derivatives, the stage state, the
 #: state at the start of a step taken in sub-steps.
 _K1, _K2, _K3, _K4, _XT, _X0 = 0, 1, 2, 3, 4, 5
+
+
+def _rk4_stepper(rhs_terms):  # type: ignore[no-untyped-def]
+    """:func:`_rk4_step` calling ``rhs_terms`` (the inlined or the called right-hand side)."""
+    def _rk4_step(x, u, q, pt, cf, cr, h, work, aux, h_over_bound):  # type: ignore
+        """One RK4 step of ``h`` from ``x`` into ``work[_XT]`` (``x`` unchanged), its stage
+        derivatives in ``work[_K1:_K4 + 1]``. Returns 1, or the number of sub-steps the first
+        stage's slip rate needs for a step of ``h`` (``h_over_bound = h / RK4_RATE_BOUND``;
+        0 never asks) and nothing else done. One call site of the right-hand side for the
+        four stages (stage s starts from x + h_s k_{s-1} with h_s = h/2, h/2, h): LLVM does
+        not unroll the loop into four copies of it (first compile time)."""
+        half = 0.5 * h
+        xt = work[_XT]
+        for stage in range(4):
+            if stage == 0:
+                rhs_terms(x, u, q, pt, cf, cr, work[_K1], aux)
+                n_sub = _substeps_inline(aux[a_rate], h_over_bound)
+                if n_sub > 1:
+                    return n_sub
+            else:
+                _advance(x, work[stage - 1], h if stage == 3 else half, xt, N_STATE)
+                rhs_terms(xt, u, q, pt, cf, cr, work[stage], aux)
+        _rk4_sum(x, work[_K1], work[_K2], work[_K3], work[_K4], h / 6.0, xt, N_STATE)
+        return 1
+    return _jit_inline(_rk4_step)
+
+
+_rk4_step_inline = _rk4_stepper(_rhs_inline)
+_rk4_step_called = _rk4_stepper(_rhs_called)
 
 
 def _take_input(u, u_held):  # type: ignore[no-untyped-def]
@@ -445,55 +508,21 @@ def _take_input(u, u_held):  # type: ignore[no-untyped-def]
 _take_input_inline = _jit_inline(_take_input)
 
 
-def _substeps(rate, dt_over_bound):  # type: ignore[no-untyped-def]
-    """Sub-steps for the slip rate ``rate`` (1/s): ``eightdof.substeps`` (1 when
-    ``rate dt <= bound``; a NaN rate gives 1 and the step's finiteness check reports it)."""
-    ratio = rate * dt_over_bound
-    if not ratio > 1.0:
-        return 1
-    if not ratio < MAX_SUB:
-        return MAX_SUB
-    return int(math.ceil(ratio))
-
-
-_substeps_inline = _jit_inline(_substeps)
-
-
 def _rk4_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
     """One RK4 step of ``dt`` in ``n_sub`` equal sub-steps, in place (the rare path: a light or
     slowly rolling wheel); False, with ``x`` restored to the step's start, if a state became
     non-finite. Calls the compiled right-hand side (not inlined: the first compile stays as
     fast as before)."""
-    xt = work[_XT]
     x0 = work[_X0]
     for j in range(N_STATE):
         x0[j] = x[j]
     h = dt / n_sub
-    half = 0.5 * h
-    sixth = h / 6.0
     for _ in range(n_sub):
-        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
-        for stage in range(1, 4):
-            hs = h if stage == 3 else half
-            kp = work[stage - 1]
-            for j in range(N_STATE):
-                xt[j] = x[j] + hs * kp[j]
-            _rhs_called(xt, u, q, pt, cf, cr, work[stage], aux)
-        k1 = work[_K1]
-        k2 = work[_K2]
-        k3 = work[_K3]
-        k4 = work[_K4]
-        ok = True
-        for j in range(N_STATE):
-            xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-            if not math.isfinite(xt[j]):
-                ok = False
-        if not ok:
+        _rk4_step_called(x, u, q, pt, cf, cr, h, work, aux, 0.0)
+        if not _accept(x, work[_XT], N_STATE):
             for j in range(N_STATE):
                 x[j] = x0[j]
             return False
-        for j in range(N_STATE):
-            x[j] = xt[j]
     return True
 
 
@@ -511,70 +540,45 @@ def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
             return -1
     work = np.empty((6, N_STATE))
     aux = np.empty(N_AUX)
-    xt = work[_XT]
     pt = _parameter_terms_inline(q)
-    half = 0.5 * dt
-    sixth = dt / 6.0
     dt_over_bound = dt / RK4_BOUND
     for step in range(n):
-        # one inlined right-hand side for the four stages (stage s starts from
-        # x + h_s k_{s-1} with h = dt/2, dt/2, dt); a loop over the four, as LLVM does not
-        # unroll it into four copies of the right-hand side (first compile time)
-        n_sub = 1
-        for stage in range(4):
-            if stage == 0:
-                _rhs_inline(x, u, q, pt, cf, cr, work[_K1], aux)
-                n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
-                if n_sub > 1:
-                    break
-            else:
-                h = dt if stage == 3 else half
-                kp = work[stage - 1]
-                for j in range(N_STATE):
-                    xt[j] = x[j] + h * kp[j]
-                _rhs_inline(xt, u, q, pt, cf, cr, work[stage], aux)
+        n_sub = _rk4_step_inline(x, u, q, pt, cf, cr, dt, work, aux, dt_over_bound)
         if n_sub > 1:
             if not _rk4_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
                 return step
-            continue
-        k1 = work[_K1]
-        k2 = work[_K2]
-        k3 = work[_K3]
-        k4 = work[_K4]
-        ok = True
-        for j in range(N_STATE):
-            xt[j] = x[j] + sixth * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-            if not math.isfinite(xt[j]):
-                ok = False
-        if not ok:
+        elif not _accept(x, work[_XT], N_STATE):
             return step
-        for j in range(N_STATE):
-            x[j] = xt[j]
     return n
+
+
+def _euler_step(x, u, q, pt, cf, cr, h, work, aux, h_over_bound):  # type: ignore
+    """One explicit-Euler step of ``h`` from ``x`` into ``work[_XT]`` (as :func:`_rk4_step`,
+    bound ``EULER_RATE_BOUND``)."""
+    _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
+    n_sub = _substeps_inline(aux[a_rate], h_over_bound)
+    if n_sub > 1:
+        return n_sub
+    _advance(x, work[_K1], h, work[_XT], N_STATE)
+    return 1
+
+
+_euler_step = _jit_inline(_euler_step)
 
 
 def _euler_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
     """One explicit-Euler step of ``dt`` in ``n_sub`` equal sub-steps (as
     :func:`_rk4_substeps`)."""
-    k1 = work[0]
-    xt = work[1]
-    x0 = work[2]
+    x0 = work[_X0]
     for j in range(N_STATE):
         x0[j] = x[j]
     h = dt / n_sub
     for _ in range(n_sub):
-        _rhs_called(x, u, q, pt, cf, cr, k1, aux)
-        ok = True
-        for j in range(N_STATE):
-            xt[j] = x[j] + h * k1[j]
-            if not math.isfinite(xt[j]):
-                ok = False
-        if not ok:
+        _euler_step(x, u, q, pt, cf, cr, h, work, aux, 0.0)
+        if not _accept(x, work[_XT], N_STATE):
             for j in range(N_STATE):
                 x[j] = x0[j]
             return False
-        for j in range(N_STATE):
-            x[j] = xt[j]
     return True
 
 
@@ -585,28 +589,17 @@ def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     if u_held is not None:
         if not _take_input_inline(u, u_held):
             return -1
-    work = np.empty((3, N_STATE))
+    work = np.empty((6, N_STATE))
     aux = np.empty(N_AUX)
-    k1 = work[0]
-    xt = work[1]
     pt = _parameter_terms_inline(q)
     dt_over_bound = dt / EULER_BOUND
     for step in range(n):
-        _rhs_called(x, u, q, pt, cf, cr, k1, aux)
-        n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
+        n_sub = _euler_step(x, u, q, pt, cf, cr, dt, work, aux, dt_over_bound)
         if n_sub > 1:
             if not _euler_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
                 return step
-            continue
-        ok = True
-        for j in range(N_STATE):
-            xt[j] = x[j] + dt * k1[j]
-            if not math.isfinite(xt[j]):
-                ok = False
-        if not ok:
+        elif not _accept(x, work[_XT], N_STATE):
             return step
-        for j in range(N_STATE):
-            x[j] = xt[j]
     return n
 
 
@@ -620,16 +613,13 @@ euler = _jit(euler)
 # The study's batch kernel advances LANES points ("lanes") at once (:mod:`fourws_sim.lanes`:
 # quantity ``row`` of lane ``l`` is element ``row * LANES + l`` of a flat array), in loops
 # over lanes whose body has no branch and no call, so the compiler turns them into vector
-# instructions. The body is ``_rhs_terms`` with every ``if`` written as a choice between
-# computed values under the same test, so a lane computes exactly the scalar code's numbers
-# (``test_eightdof_regression``). It covers the fixed-control 8-DOF (no free steering system)
-# with a tire that has ``forces_lane``.
+# instructions: the equations above (all branch-free) with the tire's ``forces_lane``. It
+# covers the fixed-control 8-DOF (no free steering system) with a tire that has
+# ``forces_lane``.
 
 #: The tire's branch-free lane function, if it has one (else the batch kernel calls the
 #: scalar kernel point by point).
 HAS_LANES = hasattr(_TIRE_MODULE, "forces_lane")
-#: Rows of the parameter terms (``_parameter_terms`` as a column).
-N_PT = _P_INV_SIGMA_R + 1
 N_COEF = int(getattr(_TIRE_MODULE, "N_COEFFS", 0))
 #: Rows of the lanes' input array: state, input, parameters, parameter terms, front and
 #: rear tire coefficients.
@@ -658,56 +648,29 @@ def _lanes_unavailable(*args):  # type: ignore[no-untyped-def]
 _forces_lane = _jit_inline(getattr(_TIRE_MODULE, "forces_lane", _lanes_unavailable))
 
 
-def _lane_wheel(IN, OUT, cbase, ln, i, xw, cd, sd, fz, yw, inv_sigma,  # type: ignore
-                U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate):
-    """Wheel ``i`` of lane ``ln`` in ``_rhs_lanes`` (``_rhs_terms``' two loops for one wheel:
-    kinematics, tire lag, tire, spin equation); writes its slip-lag and spin derivatives and
+def _lane_corner(IN, OUT, cbase, ln, i, xw, yw, cd, sd, fz, inv_sigma,  # type: ignore
+                 U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate):
+    """Corner ``i`` of lane ``ln`` in :func:`_rhs_lanes`: :func:`_corner_slip`, the tire's
+    ``forces_lane``, :func:`_corner_spin`; writes its slip-lag and spin derivatives and
     returns ``(fxb, fyb, moment about the CG, rate)``."""
-    fz = 0.0 if fz < 0.0 else fz
-    vxb = U_ - r * yw
-    vyb = V + r * xw
-    vx = vxb * cd + vyb * sd
-    vy = -vxb * sd + vyb * cd
-    avx = abs(vx)
-    den = avx if avx > vmin else vmin
-    inv_den = 1.0 / den
-    alpha = atan(vy * inv_den)
     om = IN[(R_X + i_w0 + i) * LANES + ln]
-    kappa = (om * rw - vx) * inv_den
-    lagged = inv_sigma > 0.0
-    al_lag = IN[(R_X + i_al0 + i) * LANES + ln]
-    lag_rate = den * inv_sigma
-    OUT[(R_DX + i_al0 + i) * LANES + ln] = lag_rate * (alpha - al_lag) if lagged else 0.0
-    alpha_t = al_lag if lagged else alpha
-    rate = lag_rate if (lagged and lag_rate > rate) else rate
-    spin_rate = k_spin * inv_den
-    rate = spin_rate if spin_rate > rate else rate
+    fz, alpha_t, kappa, _avx, d_alpha, rate = _corner_slip(
+        fz, U_, V, r, xw, yw, cd, sd, om, IN[(R_X + i_al0 + i) * LANES + ln], inv_sigma, rw,
+        vmin, k_spin, rate)
+    OUT[(R_DX + i_al0 + i) * LANES + ln] = d_alpha
     fx, fy, mz = _forces_lane(fz, alpha_t, kappa, mu, IN, cbase, ln)
-    fxb = fx * cd - fy * sd
-    fyb = fx * sd + fy * cd
-    moment = xw * fyb - yw * fxb + mz
-    brake = IN[(R_U + j_b0 + i) * LANES + ln]
-    brake = 0.0 if brake < 0.0 else brake
-    cap = brake + frr * fz * rw
-    t_other = IN[(R_U + j_d0 + i) * LANES + ln] - rw * fx
-    sliding = iw * abs(om) >= cap * tb
-    t_slide = (t_other - cap if om > 0.0 else
-               (t_other + cap if om < 0.0 else t_other))
-    held = -om / tb * (1.0 - abs(t_other) / cap)
-    OUT[(R_DX + i_w0 + i) * LANES + ln] = (
-        t_slide * inv_iw if sliding else
-        ((t_other - cap) * inv_iw if t_other > cap else
-         ((t_other + cap) * inv_iw if t_other < -cap else
-          (held if abs(om) > HELD_FLOOR else 0.0))))
+    fxb, fyb, moment, OUT[(R_DX + i_w0 + i) * LANES + ln] = _corner_spin(
+        fx, fy, mz, fz, om, xw, yw, cd, sd, IN[(R_U + j_d0 + i) * LANES + ln],
+        IN[(R_U + j_b0 + i) * LANES + ln], rw, iw, inv_iw, tb, frr)
     return fxb, fyb, moment, rate
 
 
-_lane_wheel = _jit_inline(_lane_wheel)
+_lane_corner = _jit_inline(_lane_corner)
 
 
 def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
-    """``_rhs_terms`` of the LANES lanes of ``IN`` (rows ``R_*``) into ``OUT`` (dx/dt, the
-    fastest slip rate, the accelerations and applied road-wheel angles: ``rhs``'s ``aux``
+    """The right-hand side of the LANES lanes of ``IN`` (rows ``R_*``) into ``OUT`` (dx/dt,
+    the fastest slip rate, the accelerations and applied road-wheel angles: ``rhs``'s ``aux``
     slots of the same names). Lanes have the steering system off."""
     for ln in range(LANES):
         U_ = IN[(R_X + i_u) * LANES + ln]
@@ -715,14 +678,10 @@ def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
         r = IN[(R_X + i_r) * LANES + ln]
         phi = IN[(R_X + i_phi) * LANES + ln]
         pr = IN[(R_X + i_p) * LANES + ln]
-        psi = IN[(R_X + i_psi) * LANES + ln]
         ax_lt = IN[(R_X + i_ax) * LANES + ln]
         ay_lt = IN[(R_X + i_ay) * LANES + ln]
-        m = IN[(R_Q + k_m) * LANES + ln]
         a = IN[(R_Q + k_a) * LANES + ln]
         b = IN[(R_Q + k_b) * LANES + ln]
-        tf = IN[(R_Q + k_tf) * LANES + ln]
-        tr = IN[(R_Q + k_tr) * LANES + ln]
         rw = IN[(R_Q + k_rw) * LANES + ln]
         iw = IN[(R_Q + k_iw) * LANES + ln]
         vmin = IN[(R_Q + k_vmin) * LANES + ln]
@@ -730,84 +689,69 @@ def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
         mu = IN[(R_Q + k_mu) * LANES + ln]
         tb = IN[(R_Q + k_tb) * LANES + ln]
         frr = IN[(R_Q + k_frr) * LANES + ln]
-        ixz = IN[(R_Q + k_ixz) * LANES + ln]
-        ix = IN[(R_Q + k_ix) * LANES + ln]
         inv_iw = IN[(R_PT + _P_INV_IW) * LANES + ln]
         delta_f = IN[(R_U + j_df) * LANES + ln] + IN[(R_Q + k_ef) * LANES + ln] * phi
         delta_r = IN[(R_U + j_dr) * LANES + ln] + IN[(R_Q + k_er) * LANES + ln] * phi
-        d_long = (IN[(R_PT + _P_HALF_M) * LANES + ln] * ax_lt * IN[(R_Q + k_hcg) * LANES + ln]
-                  * IN[(R_PT + _P_INV_L) * LANES + ln])
-        d_lat_f = ((IN[(R_Q + k_kf) * LANES + ln] * phi + IN[(R_Q + k_cf) * LANES + ln] * pr
-                    + IN[(R_PT + _P_RCF) * LANES + ln] * ay_lt
-                    + IN[(R_PT + _P_HUF) * LANES + ln] * ay_lt)
-                   * IN[(R_PT + _P_INV_TF) * LANES + ln])
-        d_lat_r = ((IN[(R_Q + k_kr) * LANES + ln] * phi + IN[(R_Q + k_cr) * LANES + ln] * pr
-                    + IN[(R_PT + _P_RCR) * LANES + ln] * ay_lt
-                    + IN[(R_PT + _P_HUR) * LANES + ln] * ay_lt)
-                   * IN[(R_PT + _P_INV_TR) * LANES + ln])
-        st_f = IN[(R_PT + _P_STF) * LANES + ln]
-        st_r = IN[(R_PT + _P_STR) * LANES + ln]
+        fz_fl, fz_fr, fz_rl, fz_rr = _wheel_loads(
+            phi, pr, ax_lt, ay_lt, IN[(R_PT + _P_HALF_M) * LANES + ln],
+            IN[(R_Q + k_hcg) * LANES + ln], IN[(R_PT + _P_INV_L) * LANES + ln],
+            IN[(R_Q + k_kf) * LANES + ln], IN[(R_Q + k_cf) * LANES + ln],
+            IN[(R_PT + _P_RCF) * LANES + ln], IN[(R_PT + _P_HUF) * LANES + ln],
+            IN[(R_PT + _P_INV_TF) * LANES + ln], IN[(R_Q + k_kr) * LANES + ln],
+            IN[(R_Q + k_cr) * LANES + ln], IN[(R_PT + _P_RCR) * LANES + ln],
+            IN[(R_PT + _P_HUR) * LANES + ln], IN[(R_PT + _P_INV_TR) * LANES + ln],
+            IN[(R_PT + _P_STF) * LANES + ln], IN[(R_PT + _P_STR) * LANES + ln])
         sdf, cdf = sincos(delta_f)
         sdr, cdr = sincos(delta_r)
         sig_f = IN[(R_PT + _P_INV_SIGMA_F) * LANES + ln]
         sig_r = IN[(R_PT + _P_INV_SIGMA_R) * LANES + ln]
-        ywf = 0.5 * tf
-        ywr = 0.5 * tr
-        # the four wheels in order (FL, FR, RL, RR), summed in wheel order as _rhs_terms
-        fxb, fyb, mom, rate = _lane_wheel(
-            IN, OUT, R_CF, ln, 0, a, cdf, sdf, (st_f - d_long) - d_lat_f, ywf, sig_f,
+        ywf = 0.5 * IN[(R_Q + k_tf) * LANES + ln]
+        ywr = 0.5 * IN[(R_Q + k_tr) * LANES + ln]
+        # the four corners in order (FL, FR, RL, RR), summed in wheel order as ``rhs``
+        fxb, fyb, mom, rate = _lane_corner(
+            IN, OUT, R_CF, ln, 0, a, ywf, cdf, sdf, fz_fl, sig_f,
             U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, 0.0)
         sum_fx = 0.0 + fxb
         sum_fy = 0.0 + fyb
         sum_n = 0.0 + mom
-        fxb, fyb, mom, rate = _lane_wheel(
-            IN, OUT, R_CF, ln, 1, a, cdf, sdf, (st_f - d_long) + d_lat_f, -ywf, sig_f,
+        fxb, fyb, mom, rate = _lane_corner(
+            IN, OUT, R_CF, ln, 1, a, -ywf, cdf, sdf, fz_fr, sig_f,
             U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
         sum_fx += fxb
         sum_fy += fyb
         sum_n += mom
-        fxb, fyb, mom, rate = _lane_wheel(
-            IN, OUT, R_CR, ln, 2, -b, cdr, sdr, (st_r + d_long) - d_lat_r, ywr, sig_r,
+        fxb, fyb, mom, rate = _lane_corner(
+            IN, OUT, R_CR, ln, 2, -b, ywr, cdr, sdr, fz_rl, sig_r,
             U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
         sum_fx += fxb
         sum_fy += fyb
         sum_n += mom
-        fxb, fyb, mom, rate = _lane_wheel(
-            IN, OUT, R_CR, ln, 3, -b, cdr, sdr, (st_r + d_long) + d_lat_r, -ywr, sig_r,
+        fxb, fyb, mom, rate = _lane_corner(
+            IN, OUT, R_CR, ln, 3, -b, -ywr, cdr, sdr, fz_rr, sig_r,
             U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
         sum_fx += fxb
         sum_fy += fyb
         sum_n += mom
         OUT[(R_DX + i_ds) * LANES + ln] = 0.0
         OUT[(R_DX + i_dsr) * LANES + ln] = 0.0
-        s, c = sincos(phi)
-        msh = IN[(R_PT + _P_MSH) * LANES + ln]
-        mshc = msh * c
-        rhs_y = sum_fy - m * U_ * r - msh * s * (pr * pr + r * r)
-        rhs_l = (mshc * U_ * r + IN[(R_PT + _P_MSHG) * LANES + ln] * s
-                 - IN[(R_PT + _P_KPHI) * LANES + ln] * phi
-                 - IN[(R_PT + _P_CPHI) * LANES + ln] * pr)
-        inv_m = IN[(R_PT + _P_INV_M) * LANES + ln]
-        inv_iz = IN[(R_PT + _P_INV_IZ) * LANES + ln]
-        det = ix - mshc * mshc * inv_m - IN[(R_PT + _P_IXZ2) * LANES + ln]
-        pd = (rhs_l + mshc * rhs_y * inv_m + ixz * sum_n * inv_iz) / det
-        vd = (rhs_y + mshc * pd) * inv_m
-        rd = (sum_n + ixz * pd) * inv_iz
-        ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
-        ax = ud - V * r
-        ay = vd + U_ * r
+        ud, vd, rd, pd, ax, ay, dX, dY, dax, day = _body_rates(
+            sum_fx, sum_fy, sum_n, U_, V, r, phi, pr, IN[(R_X + i_psi) * LANES + ln], ax_lt,
+            ay_lt, IN[(R_Q + k_m) * LANES + ln], IN[(R_Q + k_ix) * LANES + ln],
+            IN[(R_Q + k_ixz) * LANES + ln], IN[(R_PT + _P_MSH) * LANES + ln],
+            IN[(R_PT + _P_MSHG) * LANES + ln], IN[(R_PT + _P_KPHI) * LANES + ln],
+            IN[(R_PT + _P_CPHI) * LANES + ln], IN[(R_PT + _P_IXZ2) * LANES + ln],
+            IN[(R_PT + _P_INV_M) * LANES + ln], IN[(R_PT + _P_INV_IZ) * LANES + ln],
+            IN[(R_PT + _P_INV_TLT) * LANES + ln])
         OUT[(R_DX + i_u) * LANES + ln] = ud
         OUT[(R_DX + i_v) * LANES + ln] = vd
         OUT[(R_DX + i_r) * LANES + ln] = rd
         OUT[(R_DX + i_phi) * LANES + ln] = pr
         OUT[(R_DX + i_p) * LANES + ln] = pd
-        sps, cps = sincos(psi)
-        OUT[(R_DX + i_x) * LANES + ln] = U_ * cps - V * sps
-        OUT[(R_DX + i_y) * LANES + ln] = U_ * sps + V * cps
+        OUT[(R_DX + i_x) * LANES + ln] = dX
+        OUT[(R_DX + i_y) * LANES + ln] = dY
         OUT[(R_DX + i_psi) * LANES + ln] = r
-        inv_tlt = IN[(R_PT + _P_INV_TLT) * LANES + ln]
-        OUT[(R_DX + i_ax) * LANES + ln] = (ax - ax_lt) * inv_tlt
-        OUT[(R_DX + i_ay) * LANES + ln] = (ay - ay_lt) * inv_tlt
+        OUT[(R_DX + i_ax) * LANES + ln] = dax
+        OUT[(R_DX + i_ay) * LANES + ln] = day
         OUT[R_RATE * LANES + ln] = rate
         OUT[R_AX * LANES + ln] = ax
         OUT[R_AY * LANES + ln] = ay
@@ -836,6 +780,23 @@ def pack_lane(IN, ln, x, u, q, cf, cr):  # type: ignore[no-untyped-def]
         IN[(R_CR + j) * LANES + ln] = cr[j]
 
 
+def _unpack_lane(IN, X, ln, xs, us, qs, cfs, crs):  # type: ignore[no-untyped-def]
+    """Lane ``ln``'s state (from ``X``), input, parameters and tire coefficients (from
+    ``IN``) into the scalar kernel's arrays."""
+    for j in range(N_STATE):
+        xs[j] = X[j * LANES + ln]
+    for j in range(N_INPUT):
+        us[j] = IN[(R_U + j) * LANES + ln]
+    for j in range(qs.size):
+        qs[j] = IN[(R_Q + j) * LANES + ln]
+    for j in range(N_COEF):
+        cfs[j] = IN[(R_CF + j) * LANES + ln]
+        crs[j] = IN[(R_CR + j) * LANES + ln]
+
+
+_unpack_lane = _jit_inline(_unpack_lane)
+
+
 def rk4_lanes(X, IN, OUT, K, XT, RATE, active, dt, n_steps,  # type: ignore[no-untyped-def]
               xs, us, qs, cfs, crs, work, aux):
     """``n_steps`` RK4 steps of the active lanes (``active[ln] != 0``) of the states ``X``
@@ -848,18 +809,15 @@ def rk4_lanes(X, IN, OUT, K, XT, RATE, active, dt, n_steps,  # type: ignore[no-u
     (LANES,); ``work``, ``aux``: the scalar path's. Returns the lanes still active."""
     n_x = N_STATE * LANES
     half = 0.5 * dt
-    sixth = dt / 6.0
     dt_over_bound = dt / RK4_BOUND
     for _step in range(n_steps):
+        # the stages of :func:`_rk4_step`, of every lane at once
         for stage in range(4):
             if stage == 0:
                 for i in range(n_x):
                     IN[i] = X[i]
             else:
-                h = dt if stage == 3 else half
-                kp = K[stage - 1]
-                for i in range(n_x):
-                    IN[i] = X[i] + h * kp[i]
+                _advance(X, K[stage - 1], dt if stage == 3 else half, IN, n_x)
             rhs_lanes(IN, OUT)
             ks = K[stage]
             for i in range(n_x):
@@ -867,26 +825,13 @@ def rk4_lanes(X, IN, OUT, K, XT, RATE, active, dt, n_steps,  # type: ignore[no-u
             if stage == 0:
                 for ln in range(LANES):
                     RATE[ln] = OUT[R_RATE * LANES + ln]
-        k1 = K[0]
-        k2 = K[1]
-        k3 = K[2]
-        k4 = K[3]
-        for i in range(n_x):
-            XT[i] = X[i] + sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        _rk4_sum(X, K[0], K[1], K[2], K[3], dt / 6.0, XT, n_x)
         for ln in range(LANES):
             if active[ln] == 0:
                 continue
             n_sub = _substeps_inline(RATE[ln], dt_over_bound)
             if n_sub > 1:
-                for j in range(N_STATE):
-                    xs[j] = X[j * LANES + ln]
-                for j in range(N_INPUT):
-                    us[j] = IN[(R_U + j) * LANES + ln]
-                for j in range(qs.size):
-                    qs[j] = IN[(R_Q + j) * LANES + ln]
-                for j in range(N_COEF):
-                    cfs[j] = IN[(R_CF + j) * LANES + ln]
-                    crs[j] = IN[(R_CR + j) * LANES + ln]
+                _unpack_lane(IN, X, ln, xs, us, qs, cfs, crs)
                 pt = _parameter_terms_inline(qs)
                 if _rk4_substeps_called(xs, us, qs, pt, cfs, crs, dt, n_sub, work, aux):
                     for j in range(N_STATE):
