@@ -44,9 +44,10 @@ The arithmetic of a law step is written once as plain functions of floats and ar
 subset of Python that numba compiles: each law's gain schedule (:class:`GainFunction`,
 :meth:`Law.gain_function`), the low-speed fade (:func:`gain_speed`), the sum of the gained
 signals (:func:`rear_angle_of`) and the actuator's limits (:func:`actuator_step`). The
-classes here call them; the study kernels (:mod:`fourws_study.kernel`) compile the same
-functions, so a compiled closed loop performs the same float operations in the same order as
-the interpreted one.
+classes here call them; the study's compiled loop compiles the same functions
+(:mod:`fourws_control.compiled` collects them from the registry: each law class names its
+own in :attr:`Law.gain_functions` and :attr:`Law.gain_helpers`), so a compiled closed loop
+performs the same float operations in the same order as the interpreted one.
 """
 
 from __future__ import annotations
@@ -223,6 +224,12 @@ class Law(ABC):
     summary: ClassVar[str] = ""
     #: Signals the law uses; a linear model lacking one of them cannot be closed with it.
     signals: ClassVar[tuple[Signal, ...]] = ()
+    #: The plain gain functions of the law's module that :meth:`gain_function` may hold
+    #: (the study's compiled loop compiles them, :mod:`fourws_control.compiled`); none: the
+    #: law runs interpreted only.
+    gain_functions: ClassVar[tuple[Callable[[float, np.ndarray, np.ndarray], None], ...]] = ()
+    #: The plain functions of its module that the gain functions call (compiled with them).
+    gain_helpers: ClassVar[tuple[Callable[..., Any], ...]] = ()
 
     def __init__(self, belief_vehicle: Vehicle, *,
                  min_speed_mps: float = DEFAULT_MIN_SPEED_MPS,

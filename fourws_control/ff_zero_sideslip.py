@@ -91,6 +91,8 @@ class FfZeroSideslipLaw(Law):
     name = "ff_zero_sideslip"
     summary = "Sano feed-forward delta_r = Ksf(U) delta_f, zero steady sideslip (eq. 4.13, Kr=0)"
     signals: tuple[Signal, ...] = (Signal.DELTA_F,)
+    gain_functions = (zero_sideslip_gains, fixed_ratio_gains)
+    gain_helpers = (zero_sideslip_ratio, zero_sideslip_yaw_gain)
 
     def __init__(self, belief_vehicle: Vehicle, *, ksf: float | None = None,
                  min_speed_mps: float = DEFAULT_MIN_SPEED_MPS,

@@ -20,6 +20,7 @@ class FwsLaw(Law):
     name = "fws"
     summary = "front-wheel steering only (delta_r = 0)"
     signals: tuple[Signal, ...] = ()
+    gain_functions = (fws_gains,)
     _GAINS = GainFunction(fws_gains, np.zeros(0))
 
     def gain_function(self) -> GainFunction:

@@ -388,6 +388,7 @@ class LqrLaw(Law):
     name = "lqr"
     summary = ("chapter 3 LQR minimizing sideslip, delta_r = -K(U) x, gain-scheduled; "
                "designed for the sampled loop unless design=continuous")
+    gain_functions = (table_gains,)
 
     def __init__(self, belief_vehicle: Vehicle, *, model: str = "2dof",
                  design: str = LQR_DESIGNS[0], q: float = 10.0, q_steer: float = 0.0,

@@ -150,6 +150,8 @@ class Rwc1Law(Law):
     name = "rwc1_3dof"
     summary = "chapter 6 RWC 1: delta_r = Ksf1(U) delta_f, zero steady sideslip with roll"
     signals = (Signal.DELTA_F,)
+    gain_functions = (rwc1_gains,)
+    gain_helpers = (rwc_gains_3dof,)
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)
@@ -170,6 +172,8 @@ class Rwc2Law(Law):
     name = "rwc2_3dof"
     summary = "chapter 6 RWC 2: delta_r = Kr1(U) U r, zero steady sideslip with roll"
     signals = (Signal.YAW_RATE,)
+    gain_functions = (rwc2_gains,)
+    gain_helpers = (rwc_gains_3dof,)
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)
@@ -190,6 +194,7 @@ class Rwc4Law(Law):
     summary = ("chapter 6 RWC 4: delta_r = Ksf4 delta_f + Kr4 U r + Kphi phi + Kphidot phidot, "
                "V decoupled")
     signals = (Signal.DELTA_F, Signal.YAW_RATE, Signal.ROLL, Signal.ROLL_RATE)
+    gain_functions = (rwc4_gains,)
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)

@@ -41,6 +41,7 @@ class Sol1Law(Law):
     name = "sol1"
     summary = "chapter 4 Solution 1: Ksf = -Cf/Cr, Kr = (mU^2 + aCf - bCr)/(Cr U^2)"
     signals = (Signal.DELTA_F, Signal.YAW_RATE)
+    gain_functions = (sol1_gains,)
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)

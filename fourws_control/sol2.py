@@ -37,6 +37,7 @@ class Sol2Law(Law):
     name = "sol2"
     summary = "chapter 4 Solution 2: Ksf = aCf/(bCr), Kr = -(a^2 Cf + b^2 Cr)/(b Cr U^2)"
     signals = (Signal.DELTA_F, Signal.YAW_RATE)
+    gain_functions = (sol2_gains,)
 
     def __init__(self, belief_vehicle: Vehicle, **options: float) -> None:
         super().__init__(belief_vehicle, **options)

@@ -15,8 +15,9 @@ where it can (:func:`fourws_study.point.run_points`):
 * a maneuver whose steering is a function of time and whose driver only holds the initial
   speed (:data:`TIME_STEERED`); the steering of every tick is taken from the maneuver itself
   before the call;
-* a built-in law with a :class:`~fourws_control.base.GainFunction` the kernel knows
-  (:data:`fourws_study.loop_kernels.LAW_FUNCTIONS`: every law fourws ships);
+* a registered law whose :class:`~fourws_control.base.GainFunction` is one of the gain
+  functions its class declares (:func:`fourws_control.compiled.law_kind`: every law fourws
+  ships);
 * a lockstep run.
 
 Everything else -- the path-following lane change, the ISO 4138 ramp that ends on a
@@ -29,28 +30,26 @@ A study runs the compiled points of a block together (:func:`run_compiled_block`
 compiled call per tire, step and control period): in vector instructions, 16 points at a
 time (:func:`fourws_study.loop_kernels.closed_loop_lanes`), when the tire has lane kernels
 (the STI tire with its Table C.1 ``G2 = 1``), else point after point
-(:func:`~fourws_study.loop_kernels.closed_loop_block`). Either gives each point exactly its
-single call's numbers (:func:`run_compiled`).
+(:func:`~fourws_study.loop_kernels.closed_loop_block`). Either gives each point exactly the
+numbers of its single run (:func:`run_compiled`: the point-after-point kernel on a block of
+one).
 """
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
-import sys
 import time
 from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
 
-from fourws_control import Law, RearSteerActuator, make_loop_law
-from fourws_control import base, ff_zero_sideslip, fws, lqr, rwc_3dof, sol1, sol2
+from fourws_control import Law, RearSteerActuator, compiled, make_loop_law
 from fourws_run.closed_loop import ClosedLoopResult, run_twin
 from fourws_run.config import RunConfig
 from fourws_run.ticks import InputLimits, whole_multiple
-from fourws_sim import drivers
+from fourws_sim import variants
 from fourws_sim.maneuvers import Maneuver, make_maneuver
 from fourws_sim.models import eightdof
 
@@ -64,59 +63,26 @@ DRIVEN_WHEELS = {"front": (1.0, 1.0, 0.0, 0.0), "rear": (0.0, 0.0, 1.0, 1.0),
 #: What the twin says of a run it completed.
 DURATION = "duration"
 
-_LOADED: dict[str, ModuleType] = {}
-_REGISTERED = False
 #: Steering of each tick by maneuver definition (:func:`_steering`).
 _STEERING: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 _STEERING_CACHE_SIZE = 64
 
 
-def _register_plain_functions() -> None:
-    """Let numba compile the plain law, actuator and driver functions where the kernel calls
-    them (they stay ordinary Python functions for everyone else)."""
-    global _REGISTERED
-    if _REGISTERED:
-        return
-    # numba: the compiled loop only (the interpreted twin runs without it)
-    from numba.extending import register_jitable
-
-    for fn in (base.gain_speed, base.rear_angle_of, base.actuator_step, fws.fws_gains,
-               sol1.sol1_gains, sol2.sol2_gains, ff_zero_sideslip.zero_sideslip_ratio,
-               ff_zero_sideslip.zero_sideslip_yaw_gain, ff_zero_sideslip.zero_sideslip_gains,
-               ff_zero_sideslip.fixed_ratio_gains, rwc_3dof.rwc_gains_3dof,
-               rwc_3dof.rwc1_gains, rwc_3dof.rwc2_gains, rwc_3dof.rwc4_gains,
-               lqr.table_gains, drivers.speed_hold_request, drivers.split_brake_torque):
-        register_jitable(fn)
-    _REGISTERED = True
+#: The study's compiled closed loop, a template of :mod:`fourws_sim.variants`.
+LOOP_TEMPLATE = "fourws_study.loop_kernels"
 
 
 def loop_kernel_for(tire_name: str) -> ModuleType:
-    """The :mod:`fourws_study.loop_kernels` variant of tire model ``tire_name`` (loaded once
-    per process under its own module name; compiled at its first call and cached on disk).
+    """The :mod:`fourws_study.loop_kernels` variant of tire model ``tire_name``
+    (:func:`fourws_sim.variants.load`: built once per process, compiled at its first call and
+    cached on disk).
 
     Raises
     ------
     UnknownNameError
         Unknown tire model.
     """
-    if tire_name not in _LOADED:
-        # numba: the compiled loop only (the interpreted twin runs without it)
-        from fourws_sim.tires import get_tire
-        from fourws_study import loop_kernels
-
-        get_tire(tire_name)
-        _register_plain_functions()
-        name = f"{loop_kernels.__name__}_{tire_name}"
-        module = sys.modules.get(name)
-        if module is None:
-            spec = importlib.util.spec_from_file_location(name, loop_kernels.__file__)
-            assert spec is not None and spec.loader is not None
-            module = importlib.util.module_from_spec(spec)
-            module.TIRE_NAME = tire_name  # type: ignore[attr-defined]
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
-        _LOADED[tire_name] = module
-    return _LOADED[tire_name]
+    return variants.load(LOOP_TEMPLATE, tire_name)
 
 
 @dataclass
@@ -178,11 +144,8 @@ def compiled_plan(config: RunConfig, law: Law | None = None) -> str:
     if config.maneuver.type not in TIME_STEERED:
         return f"maneuver type {config.maneuver.type} (its driver steers from the state)"
     if law is not None:
-        # numba: the compiled loop only (the interpreted twin runs without it)
-        from fourws_study.loop_kernels import LAW_FUNCTIONS
-
         gains = law.gain_function()
-        if gains is None or not any(gains.function is f for f in LAW_FUNCTIONS):
+        if gains is None or compiled.law_kind(gains.function) is None:
             return f"law {config.law} has no compiled gain function"
     return ""
 
@@ -259,8 +222,9 @@ def _steering(man: Maneuver, speed: float, dt: float,
 
 @dataclass
 class Prepared:
-    """One point ready for the compiled loop (:func:`prepare_compiled`): the arguments of
-    :func:`fourws_study.loop_kernels.closed_loop` and what turns its output into a record.
+    """One point ready for the compiled loop (:func:`prepare_compiled`): its row of the
+    arguments of :func:`fourws_study.loop_kernels.closed_loop_block` and what turns its output
+    into a record.
 
     ``group`` is what points of one compiled block call must share: tire variant,
     integration step and steps per control period. ``lanes``: the point can run in the
@@ -338,7 +302,8 @@ def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
     actuator = RearSteerActuator(config.belief)
     gains = law.gain_function()
     assert gains is not None
-    kind = next(i for i, f in enumerate(module.LAW_FUNCTIONS) if gains.function is f)
+    kind = compiled.law_kind(gains.function)
+    assert kind is not None
     condition = getattr(p.tire, "LANE_CONDITION", None)  # a coefficient lanes need
     lanes = module.HAS_LANES and (condition is None or all(
         float(coeffs[condition[0]]) == condition[1]
@@ -368,68 +333,67 @@ def _record(prep: Prepared, code: int, out: np.ndarray, loop_seconds: float
 
 
 def run_compiled(config: RunConfig, law: Law) -> LoopRecord | str:
-    """Run ``config`` in one compiled call of the single-run kernel
-    (:func:`fourws_study.loop_kernels.closed_loop`); the :class:`LoopRecord`, or why the twin
-    must run it (a string)."""
+    """Run ``config`` alone in the compiled loop (a block of one point in
+    :func:`fourws_study.loop_kernels.closed_loop_block`, the scalar kernel); the
+    :class:`LoopRecord`, or why the twin must run it (a string)."""
     prep = prepare_compiled(config, law)
     if isinstance(prep, str):
         return prep
-    out = np.zeros((prep.front.size + 1, prep.module.N_CHANNELS))
-    t0 = time.perf_counter()
-    code, _ticks = prep.module.closed_loop(
-        prep.x, prep.q, prep.cf, prep.cr, prep.group[1], prep.group[2], prep.hand,
-        prep.front, prep.drv, prep.kind, prep.law_params, prep.min_speed, prep.angle_limit,
-        prep.max_step, out)
-    return _record(prep, int(code), out, time.perf_counter() - t0)
+    return _run_group([prep], lanes=False)[0]
 
 
 def run_compiled_block(preps: list[Prepared]) -> list[LoopRecord | str]:
     """Run prepared points in one compiled call per group of equal tire, step and control
     period (:func:`fourws_study.loop_kernels.closed_loop_lanes` for the points that can run
     in vector instructions, :func:`~fourws_study.loop_kernels.closed_loop_block` for the
-    others); each point's record (its ``loop_seconds`` the block's kernel time shared in
-    proportion to its ticks), or why the twin must run it. The records equal
+    others); each point's record, or why the twin must run it. The records equal
     :func:`run_compiled`'s bit for bit (``test/test_study.py``)."""
     results: list[LoopRecord | str] = [""] * len(preps)
     groups: dict[tuple[tuple[str, float, int], bool], list[int]] = {}
     for i, prep in enumerate(preps):
         groups.setdefault((prep.group, prep.lanes), []).append(i)
-    for ((_, dt, n_step), lanes), members in groups.items():
-        block = [preps[i] for i in members]
-        module = block[0].module
-        n_ticks = np.array([p.front.size for p in block], dtype=np.int64)
-        width = int(n_ticks.max())
-        hand = np.zeros((len(block), width))
-        front = np.zeros((len(block), width))
-        for j, p in enumerate(block):
-            hand[j, :p.hand.size] = p.hand
-            front[j, :p.front.size] = p.front
-        sizes = np.array([p.law_params.size for p in block], dtype=np.int64)
-        law_start = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
-        law_flat = (np.concatenate([p.law_params for p in block]) if sizes.sum()
-                    else np.zeros(0))
-        out = np.zeros((len(block), width + 1, module.N_CHANNELS))
-        codes = np.zeros(len(block), dtype=np.int64)
-        ticks = np.zeros(len(block), dtype=np.int64)
-        x = np.stack([p.x for p in block])
-        t0 = time.perf_counter()
-        kernel = module.closed_loop_lanes if lanes else module.closed_loop_block
-        kernel(
-            x, np.stack([p.q for p in block]), np.stack([p.cf for p in block]),
-            np.stack([p.cr for p in block]), float(dt), int(n_step), hand, front, n_ticks,
-            np.stack([p.drv for p in block]), np.array([p.kind for p in block], np.int64),
-            np.ascontiguousarray(law_flat, dtype=np.float64), law_start,
-            np.array([p.min_speed for p in block]), np.array([p.angle_limit for p in block]),
-            np.array([p.max_step for p in block]), out, codes, ticks)
-        seconds = time.perf_counter() - t0
-        total = max(int(n_ticks.sum()), 1)
-        for j, i in enumerate(members):
-            n = int(n_ticks[j])
-            results[i] = _record(block[j], int(codes[j]), out[j, :n + 1],
-                                 seconds * n / total)
+    for (_, lanes), members in groups.items():
+        for i, record in zip(members, _run_group([preps[i] for i in members], lanes)):
+            results[i] = record
     return results
 
 
-__all__ = ["DRIVEN_WHEELS", "LoopRecord", "Prepared", "TIME_STEERED", "build_law",
-           "compiled_plan", "loop_kernel_for", "prepare_compiled", "run_compiled",
+def _run_group(block: list[Prepared], lanes: bool) -> list[LoopRecord | str]:
+    """Points of one group (equal tire, step and control period) in one compiled call: the
+    lane kernel if ``lanes``, else point after point. Each point's ``loop_seconds`` is the
+    call's time shared in proportion to its ticks."""
+    module = block[0].module
+    _, dt, n_step = block[0].group
+    n_ticks = np.array([p.front.size for p in block], dtype=np.int64)
+    width = int(n_ticks.max())
+    hand = np.zeros((len(block), width))
+    front = np.zeros((len(block), width))
+    for j, p in enumerate(block):
+        hand[j, :p.hand.size] = p.hand
+        front[j, :p.front.size] = p.front
+    sizes = np.array([p.law_params.size for p in block], dtype=np.int64)
+    law_start = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
+    law_flat = (np.concatenate([p.law_params for p in block]) if sizes.sum()
+                else np.zeros(0))
+    out = np.zeros((len(block), width + 1, module.N_CHANNELS))
+    codes = np.zeros(len(block), dtype=np.int64)
+    ticks = np.zeros(len(block), dtype=np.int64)
+    x = np.stack([p.x for p in block])
+    t0 = time.perf_counter()
+    kernel = module.closed_loop_lanes if lanes else module.closed_loop_block
+    kernel(
+        x, np.stack([p.q for p in block]), np.stack([p.cf for p in block]),
+        np.stack([p.cr for p in block]), float(dt), int(n_step), hand, front, n_ticks,
+        np.stack([p.drv for p in block]), np.array([p.kind for p in block], np.int64),
+        np.ascontiguousarray(law_flat, dtype=np.float64), law_start,
+        np.array([p.min_speed for p in block]), np.array([p.angle_limit for p in block]),
+        np.array([p.max_step for p in block]), out, codes, ticks)
+    seconds = time.perf_counter() - t0
+    total = max(int(n_ticks.sum()), 1)
+    return [_record(p, int(codes[j]), out[j, :int(n_ticks[j]) + 1],
+                    seconds * int(n_ticks[j]) / total) for j, p in enumerate(block)]
+
+
+__all__ = ["DRIVEN_WHEELS", "LOOP_TEMPLATE", "LoopRecord", "Prepared", "TIME_STEERED",
+           "build_law", "compiled_plan", "loop_kernel_for", "prepare_compiled", "run_compiled",
            "run_compiled_block", "run_interpreted", "twin_record"]

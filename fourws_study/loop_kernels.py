@@ -1,72 +1,60 @@
 # SPDX-FileCopyrightText: 2026 fourws developers
 # SPDX-License-Identifier: Apache-2.0
-"""Numba kernel of one whole closed-loop run of the offline twin, for one tire model.
+"""Numba kernels of whole closed-loop runs of the offline twin, for one tire model.
 
-Do not import this module directly: :func:`fourws_study.kernel.loop_kernel_for` loads it once
-per tire model under its own module name with ``TIRE_NAME`` set (as
-:func:`fourws_sim.models.eightdof.kernels_for` loads the 8-DOF kernels), so each tire variant
-calls that tire's compiled RK4 loop and right-hand side and numba's disk cache keeps one entry
-per variant.
+A template of :mod:`fourws_sim.variants`: :func:`fourws_study.kernel.loop_kernel_for` loads
+it once per tire model (``fourws_study.loop_kernels[sti]``, ...), so each variant calls that
+tire's compiled RK4 loop and right-hand side (:func:`fourws_sim.models.eightdof.kernel_module`)
+and numba's disk cache keeps one entry per variant.
 
-:func:`closed_loop` runs every control tick of :func:`fourws_run.closed_loop.run_closed_loop`
-in one compiled call, for the maneuvers whose steering is a function of time and whose driver
-only holds the speed: the tick's outputs (the 8-DOF right-hand side with the held input, as
+The kernels run every control tick of :func:`fourws_run.closed_loop.run_closed_loop` in one
+compiled call, for the maneuvers whose steering is a function of time and whose driver only
+holds the speed: the tick's outputs (the 8-DOF right-hand side with the held input, as
 ``Simulator.outputs``), the speed-hold driver (:func:`fourws_sim.drivers.speed_hold_request`,
 :func:`~fourws_sim.drivers.split_brake_torque`), the law (its
-:class:`~fourws_control.base.GainFunction`, :func:`~fourws_control.base.gain_speed`,
+:class:`~fourws_control.base.GainFunction` through the dispatch of
+:mod:`fourws_control.compiled`, :func:`~fourws_control.base.gain_speed`,
 :func:`~fourws_control.base.rear_angle_of`), the actuator
 (:func:`~fourws_control.base.actuator_step`) and one control period of the compiled RK4 loop
 (:attr:`fourws_sim.models.eightdof.Kernels.rk4`). Those functions are the ones the
-interpreted twin calls (registered with numba by :mod:`fourws_study.kernel`), so the kernel
-performs the twin's float operations in the twin's order; the steering angles of each tick
-are the maneuver's own, computed before the call. What only the interpreted twin decides --
-a refused input, a law that fails, a diverging state -- ends the kernel with a code, and
-the point is run again by the twin, which says why.
+interpreted twin calls, so the kernel performs the twin's float operations in the twin's
+order; the steering angles of each tick are the maneuver's own, computed before the call.
+What only the interpreted twin decides -- a refused input, a law that fails, a diverging
+state -- ends a point with a code, and the point is run again by the twin, which says why.
+
+A tick (:func:`_respond`, :func:`_state_row`, :func:`_no_commands`) is written once; the
+memory layout of the states makes the two kernels, both over a block of points:
+:func:`closed_loop_block` runs them point after point (:func:`_run_point`; a single run is a
+block of one), :func:`closed_loop_lanes` integrates :data:`fourws_sim.lanes.LANES` of them at
+a time in vector instructions.
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
-import types
-from pathlib import Path
-from typing import Any
 
-import numba
 import numpy as np
 
+from fourws_control import compiled
 from fourws_control.base import actuator_step, gain_speed, rear_angle_of
-import fourws_control.base
-from fourws_control.ff_zero_sideslip import fixed_ratio_gains, zero_sideslip_gains
-import fourws_control.ff_zero_sideslip
-from fourws_control.fws import fws_gains
-import fourws_control.fws
-from fourws_control.lqr import table_gains
-import fourws_control.lqr
-from fourws_control.rwc_3dof import rwc1_gains, rwc2_gains, rwc4_gains
-import fourws_control.rwc_3dof
-from fourws_control.sol1 import sol1_gains
-import fourws_control.sol1
-from fourws_control.sol2 import sol2_gains
-import fourws_control.sol2
+from fourws_sim import drivers, variants
 from fourws_sim.drivers import speed_hold_request, split_brake_torque
-import fourws_sim.drivers
-import fourws_sim.lanes
-import fourws_sim.trig
-from fourws_sim.models import eightdof, eightdof_kernels
 from fourws_sim.lanes import LANES
 from fourws_sim.models.eightdof import (INPUT, N_AUX, N_INPUT, N_STATE, STATE, aux_from_array,
-                                        kernels_for, lane_kernels_for)
+                                        kernel_module, kernels_for, lane_kernels_for)
 from fourws_sim.params import GRAVITY_MPS2
-from fourws_sim.tires import get_tire
 
-#: Tire model of this variant (set by ``loop_kernel_for`` before the module body runs).
-TIRE_NAME: str = globals().get("TIRE_NAME", "linear")
+#: Tire model of this variant (:func:`fourws_sim.variants.tire_of` its module name).
+TIRE_NAME: str = variants.tire_of(__name__)
 _KERNELS = kernels_for(TIRE_NAME)
 #: The tire's batch kernels of LANES points (None: the tire has no lane function).
 _LANES = lane_kernels_for(TIRE_NAME)
 _rk4 = _KERNELS.rk4
 _rhs = _KERNELS.rhs
+#: The law's gains by law kind (:func:`fourws_control.compiled.compiled_gains`, which also
+#: lets numba compile the law step's plain functions); the driver's plain functions.
+_law_gains = compiled.compiled_gains()
+variants.register_plain((speed_hold_request, split_brake_torque))
 
 #: Recorded channels, one column each of the kernel's output (SI units; the names of
 #: ``VehicleState`` and of :class:`fourws_analysis.bag.UniformRun`).
@@ -81,10 +69,6 @@ N_CHANNELS = len(CHANNELS)
  C_FRONT, C_LAW, C_REAR, C_DRIVE, C_BRAKE) = range(N_CHANNELS)
 #: The channels of the vehicle state (the rest are the answers to it).
 STATE_CHANNELS = CHANNELS[:C_HAND]
-
-#: Law kinds: the position of the law's gain function in this tuple.
-LAW_FUNCTIONS = (fws_gains, sol1_gains, sol2_gains, zero_sideslip_gains, fixed_ratio_gains,
-                 rwc1_gains, rwc2_gains, rwc4_gains, table_gains)
 
 #: Slots of the driver parameter vector ``drv``.
 (D_ENABLED, D_KP, D_KI, D_MAX_DECEL, D_MAX_ACCEL, D_MASS, D_RADIUS, D_ROLLING, D_BRAKE_FRONT,
@@ -108,27 +92,11 @@ G = float(GRAVITY_MPS2)
 
 
 def _gains(kind, speed, params, out):  # type: ignore[no-untyped-def]
-    """The law's design gains at ``speed`` into ``out`` (zeroed first)."""
+    """The gains of law kind ``kind`` (:func:`fourws_control.compiled.law_kind`) at
+    ``speed`` into ``out`` (zeroed first)."""
     for i in range(out.shape[0]):
         out[i] = 0.0
-    if kind == 0:
-        fws_gains(speed, params, out)
-    elif kind == 1:
-        sol1_gains(speed, params, out)
-    elif kind == 2:
-        sol2_gains(speed, params, out)
-    elif kind == 3:
-        zero_sideslip_gains(speed, params, out)
-    elif kind == 4:
-        fixed_ratio_gains(speed, params, out)
-    elif kind == 5:
-        rwc1_gains(speed, params, out)
-    elif kind == 6:
-        rwc2_gains(speed, params, out)
-    elif kind == 7:
-        rwc4_gains(speed, params, out)
-    else:
-        table_gains(speed, params, out)
+    _law_gains(kind, speed, params, out)
 
 
 def _state_row(x, t, ax, ay, delta_f, delta_r, row):  # type: ignore[no-untyped-def]
@@ -240,9 +208,10 @@ def _no_commands(row):  # type: ignore[no-untyped-def]
         row[c] = math.nan
 
 
-def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-untyped-def]
-                law_kind, law_params, min_speed, angle_limit, max_step, out):
-    """Run ``out.shape[0]`` control ticks from state ``x`` (modified in place).
+def _run_point(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-untyped-def]
+               law_kind, law_params, min_speed, angle_limit, max_step, out):
+    """Run ``out.shape[0] - 1`` control ticks of one point from state ``x`` (modified in
+    place).
 
     Parameters
     ----------
@@ -259,7 +228,7 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
     drv : float64 array
         Speed-hold driver and input limits (slots ``D_*``).
     law_kind : int
-        Index of the law's gain function in :data:`LAW_FUNCTIONS`.
+        The law's kind (:func:`fourws_control.compiled.law_kind`).
     law_params : float64 array
         The law's :class:`~fourws_control.base.GainFunction` parameters.
     min_speed, angle_limit, max_step : float
@@ -282,9 +251,12 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
     drive = np.zeros(4)
     brake = np.zeros(4)
     carry = np.zeros(3)  # the driver's integral and last time, the actuator's angle
-    for k in range(n_ticks):
+    for k in range(n_ticks + 1):
         # the tick's outputs: Simulator.outputs() with the input held since the last step
         _outputs(x, u, q, cf, cr, dx, aux, (k * n_step) * dt, out[k])
+        if k == n_ticks:  # the state after the last tick
+            _no_commands(out[k])
+            break
         code = _respond(x, u, k, dt, n_step, out[k], hand[k], front[k], drv, law_kind,
                         law_params, min_speed, angle_limit, max_step, carry, drive, brake,
                         k_gain)
@@ -292,17 +264,15 @@ def closed_loop(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-u
             return code, k
         if _rk4(x, u, q, cf, cr, dt, n_step) < n_step:
             return DIVERGED, k + 1
-    _outputs(x, u, q, cf, cr, dx, aux, (n_ticks * n_step) * dt, out[n_ticks])
-    _no_commands(out[n_ticks])
     return DONE, n_ticks
 
 
 def closed_loop_block(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore[no-untyped-def]
                       n_ticks, drv, law_kind, law_flat, law_start, min_speed, angle_limit,
                       max_step, out, codes, ticks):
-    """:func:`closed_loop` of a block of points (same tire, step and control period) in one
-    call: point ``b`` runs ``closed_loop`` itself on row ``b`` of every per-point array, so
-    its numbers are those of its own single call, bit for bit.
+    """A block of points (same tire, step and control period) in one call, point after
+    point: point ``b`` runs :func:`_run_point` on row ``b`` of every per-point array (a
+    single run is a block of one).
 
     Parameters
     ----------
@@ -328,9 +298,9 @@ def closed_loop_block(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore[no-
     """
     for b in range(x.shape[0]):
         n = n_ticks[b]
-        code, k = closed_loop(x[b], q[b], cf[b], cr[b], dt, n_step, hand[b, :n], front[b, :n],
-                              drv[b], law_kind[b], law_flat[law_start[b]:law_start[b + 1]],
-                              min_speed[b], angle_limit[b], max_step[b], out[b, :n + 1])
+        code, k = _run_point(x[b], q[b], cf[b], cr[b], dt, n_step, hand[b, :n], front[b, :n],
+                             drv[b], law_kind[b], law_flat[law_start[b]:law_start[b + 1]],
+                             min_speed[b], angle_limit[b], max_step[b], out[b, :n + 1])
         codes[b] = code
         ticks[b] = k
 
@@ -341,11 +311,11 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
     """:func:`closed_loop_block` (same arguments and results) with the integration of
     :data:`fourws_sim.lanes.LANES` points at a time in vector instructions
     (``rk4_lanes`` of the tire's kernel module): each control tick answers every point with
-    the scalar code of :func:`closed_loop` (``_respond``; the tick's outputs from one lane
+    the scalar code of :func:`_run_point` (``_respond``; the tick's outputs from one lane
     right-hand side of all points), then one control period of RK4 runs for all of them at
-    once. A point gets exactly its :func:`closed_loop` numbers (the lane
-    right-hand side is the scalar one's operations, branch-free; ``test_study.py``).
-    Only for a tire with lane kernels (``_LANES`` not None)."""
+    once. A point gets exactly its :func:`_run_point` numbers (the lane right-hand side
+    calls the scalar one's equations; ``test_study.py``). Only for a tire with lane kernels
+    (``_LANES`` not None)."""
     n_points = x.shape[0]
     n_x = N_STATE * LANES
     IN = np.zeros(_LANES.N_IN * LANES)
@@ -434,46 +404,22 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
 
 # ------------------------------------------------------------------------------ compiling
 
-def _source_digest() -> str:
-    """Short hash of the sources compiled into this variant: this file, the 8-DOF model and
-    kernels, the tire, and the law, actuator and driver functions it calls. numba checks only
-    the stamp of a function's own file, so without it an edited law or driver would run from
-    a stale cache."""
-    digest = hashlib.sha1()
-    digest.update(Path(__file__).read_bytes())
-    digest.update(repr(sorted(JIT_OPTIONS.items())).encode())
-    for module in (fourws_control.base, fourws_control.ff_zero_sideslip, fourws_control.fws,
-                   fourws_control.lqr, fourws_control.rwc_3dof, fourws_control.sol1,
-                   fourws_control.sol2, fourws_sim.drivers, eightdof, eightdof_kernels,
-                   fourws_sim.trig, fourws_sim.lanes, get_tire(TIRE_NAME)):
-        digest.update(Path(module.__file__).read_bytes())  # type: ignore[arg-type]
-    return digest.hexdigest()[:12]
-
-
 #: numba options: those of the 8-DOF kernels (IEEE division, no fast-math: no contraction or
 #: reassociation, so the compiled arithmetic is the interpreted one).
-JIT_OPTIONS: dict[str, Any] = {"error_model": "numpy"}
-_VARIANT = f"{TIRE_NAME}_{_source_digest()}"
+JIT_OPTIONS = dict(compiled.JIT_OPTIONS)
+#: What this variant compiles in besides this file: the laws (their modules, the registry's
+#: order of the kinds, the law step), the driver, and the 8-DOF kernels of the tire.
+VARIANT = variants.Variant(__file__, TIRE_NAME, (*compiled.source_modules(), drivers),
+                           JIT_OPTIONS, depends=(kernel_module(TIRE_NAME).VARIANT,))
 
-
-def _jit(func: Any) -> Any:
-    """Compile ``func`` for this variant, disk-cached under a name holding the variant and the
-    digest of its sources (a copy, so the module's own function keeps its name)."""
-    copy = types.FunctionType(func.__code__, func.__globals__, func.__name__,
-                              func.__defaults__, func.__closure__)
-    copy.__qualname__ = f"{func.__name__}_{_VARIANT}"
-    copy.__doc__ = func.__doc__
-    return numba.njit(cache=True, **JIT_OPTIONS)(copy)
-
-
-_gains = numba.njit(inline="always", **JIT_OPTIONS)(_gains)
-_outputs = numba.njit(inline="always", **JIT_OPTIONS)(_outputs)
-_state_row = numba.njit(inline="always", **JIT_OPTIONS)(_state_row)
-_respond = numba.njit(inline="always", **JIT_OPTIONS)(_respond)
-_no_commands = numba.njit(inline="always", **JIT_OPTIONS)(_no_commands)
-closed_loop = _jit(closed_loop)
-closed_loop_block = _jit(closed_loop_block)
+_gains = VARIANT.inline(_gains)
+_outputs = VARIANT.inline(_outputs)
+_state_row = VARIANT.inline(_state_row)
+_respond = VARIANT.inline(_respond)
+_no_commands = VARIANT.inline(_no_commands)
+_run_point = VARIANT.inline(_run_point)
+closed_loop_block = VARIANT.jit(closed_loop_block)
 #: The batch kernel in vector instructions, where the tire has lane kernels.
 HAS_LANES = _LANES is not None
 if HAS_LANES:
-    closed_loop_lanes = _jit(closed_loop_lanes)
+    closed_loop_lanes = VARIANT.jit(closed_loop_lanes)

@@ -33,9 +33,11 @@ from fourws_analysis import linear
 from fourws_analysis.extremes import run_extremes
 from fourws_analysis.lane_change import lane_change_metrics
 from fourws_cli.main import main as fourws_main
+from fourws_control import LAWS, compiled
 from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import DoubleLaneChangeParams
+from fourws_sim.tires import TIRES, get_tire
 from fourws_study.execute import run_study
 from fourws_study.kernel import (build_law, prepare_compiled, run_compiled,
                                  run_compiled_block, run_interpreted)
@@ -80,35 +82,94 @@ def _table(path: Path):
 
 # ------------------------------------------------------------------ points and the twin
 
-@pytest.mark.parametrize("maneuver", [STEP, SINE], ids=["step_steer", "sine"])
-def test_compiled_point_equals_offline_twin_bit_for_bit(tmp_path, maneuver):
-    """For four laws (closed form, 3-DOF fit, LQR gain table, zero-sideslip feed-forward)
-    with a belief 30 % off, the compiled closed loop of a study point gives the arrays of
-    run_closed_loop of the same RunConfig to the last bit: every state channel, the driver's
-    commands, the law's command and the actuator's angle at every tick."""
-    study = _study(tmp_path, "twin", scenario=_scenario(maneuver),
-                   grid={"belief.cornering_stiffness_scale": [0.7],
-                         "law": ["sol1", "rwc4_3dof", "lqr", "ff_zero_sideslip"]})
-    for point in study.points():
-        config = study.config(point)
-        compiled = run_compiled(config, build_law(config))
-        assert not isinstance(compiled, str), compiled
+#: Law options that select a gain function a law's default options do not (each registered
+#: law runs with its defaults; test_the_law_cases_reach_every_compiled_gain_function checks that
+#: these cases reach every gain function of fourws_control.compiled).
+OPTION_CASES = {"ff_zero_sideslip": [{"ksf": 0.2}]}
+#: (law, options) of every registered law, then the option cases.
+LAW_CASES = [(law, {}) for law in LAWS] + [
+    (law, options) for law, cases in OPTION_CASES.items() for options in cases]
+#: The tires with lane kernels (the batch kernel in vector instructions).
+LANE_TIRES = [t for t in TIRES if hasattr(get_tire(t), "forces_lane")]
+#: Every tire with lane kernels, then the first without.
+TIRE_CASES = LANE_TIRES + [t for t in TIRES if t not in LANE_TIRES][:1]
+#: Recorded channels of the compiled record and where the twin's result has each.
+TWIN_CHANNELS = {
+    "steering_wheel_angle_rad": lambda twin: twin.driver["steering_wheel_angle_rad"],
+    "front_wheel_angle_cmd_rad": lambda twin: twin.driver["front_wheel_angle_rad"],
+    "rear_law_rad": lambda twin: twin.rear_law_rad,
+    "rear_command_rad": lambda twin: twin.rear_angle_rad,
+    "drive_torque_total_nm": lambda twin: _wheel_sum(twin.driver["drive_torque_nm"]),
+    "brake_torque_total_nm": lambda twin: _wheel_sum(twin.driver["brake_torque_nm"]),
+}
+
+
+def _wheel_sum(torques: np.ndarray) -> np.ndarray:
+    """FL + FR + RL + RR in that order (the kernel's sum)."""
+    return torques[:, 0] + torques[:, 1] + torques[:, 2] + torques[:, 3]
+
+
+def _law_case_id(case) -> str:
+    law, options = case
+    return law + "".join(f"-{k}={v}" for k, v in options.items())
+
+
+def _case_config(tmp_path: Path, maneuver: dict, law: str, options: dict, tire: str):
+    study = _study(tmp_path, f"twin_{maneuver['type']}",
+                   scenario=_scenario(maneuver, laws=[law], law_options={law: options},
+                                      tire=tire),
+                   grid={"belief.cornering_stiffness_scale": [0.7]})
+    (point,) = study.points()
+    return study.config(point)
+
+
+def test_the_law_cases_reach_every_compiled_gain_function(tmp_path):
+    """The cases of the next test build laws whose gain functions are, together, exactly the
+    compiled loop's (fourws_control.compiled, from the registry): a law added to the
+    registry is a case by itself, and one with a second gain function fails here until an
+    option case reaches it."""
+    reached = set()
+    for law, options in LAW_CASES:
+        built = build_law(_case_config(tmp_path, STEP, law, options, TIRE_CASES[0]))
+        reached.add(built.gain_function().function)
+    assert reached == set(compiled.gain_functions())
+    assert sorted(compiled.law_kind(f) for f in reached) == list(range(len(reached)))
+
+
+@pytest.mark.parametrize("tire", TIRE_CASES)
+@pytest.mark.parametrize("law, options", LAW_CASES, ids=[_law_case_id(c) for c in LAW_CASES])
+def test_every_law_and_tire_compiled_equals_the_twin_bit_for_bit(tmp_path, law, options, tire):
+    """For every registered law (and option case) with every tire that has lane kernels and
+    one without, a belief 30 % off, a step steer and a sine: the compiled closed loop of a
+    study point alone (the scalar kernel) gives run_closed_loop's arrays of the same
+    RunConfig to the last bit -- every recorded channel, the driver's commands, the law's
+    command and the actuator's angle at every tick, and the state after the last tick -- and
+    the point in a block (in vector instructions where the tire has lane kernels) gives the
+    same bits."""
+    for maneuver in (STEP, SINE):
+        config = _case_config(tmp_path, maneuver, law, options, tire)
+        built = build_law(config)
+        assert compiled.law_kind(built.gain_function().function) is not None
+        single = run_compiled(config, built)
+        prep = prepare_compiled(config, built)
+        assert not isinstance(single, str) and not isinstance(prep, str), (single, prep)
+        assert prep.lanes == (tire in LANE_TIRES)
+        (block,) = run_compiled_block([prep])
         twin = run_closed_loop(config.vehicle, config.maneuver, config.law,
                                model=config.model, dt_s=config.integration_step_s,
                                control_period_s=config.control_period_s,
                                belief_vehicle=config.belief, integrator=config.integrator,
                                law_options=config.law_options, tire=config.tire)
-        assert compiled.time_s.tobytes() == twin.time_s.tobytes()
-        for name in ("yaw_rate_radps", "lateral_velocity_mps", "speed_mps", "roll_rad",
-                     "x_m", "y_m", "sideslip_rad", "lateral_accel_mps2",
-                     "rear_wheel_angle_rad", "front_wheel_angle_rad"):
-            assert compiled.channels[name].tobytes() == twin[name].tobytes(), name
-        assert compiled.channels["rear_command_rad"].tobytes() == twin.rear_angle_rad.tobytes()
-        assert compiled.channels["rear_law_rad"].tobytes() == twin.rear_law_rad.tobytes()
-        assert compiled.channels["front_wheel_angle_cmd_rad"].tobytes() \
-            == twin.driver["front_wheel_angle_rad"].tobytes()
+        assert single.time_s.tobytes() == twin.time_s.tobytes()
+        assert single.channels.keys() == block.channels.keys()
+        for name, values in single.channels.items():
+            want = TWIN_CHANNELS[name](twin) if name in TWIN_CHANNELS else twin[name]
+            assert values.tobytes() == want.tobytes(), name
+            assert block.channels[name].tobytes() == values.tobytes(), name
+        assert single.final == block.final == {
+            name: float(twin.final_outputs[name]) for name in single.final}
         # the law acts: its rear steer is not zero (else the test would prove little)
-        assert np.max(np.abs(twin.rear_angle_rad)) > 1e-4
+        assert law == "fws" or np.max(np.abs(twin.rear_angle_rad)) > 1e-4
 
 
 def test_batch_kernel_equals_the_single_run_kernel_bit_for_bit(tmp_path):
