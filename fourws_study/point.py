@@ -28,9 +28,12 @@ the same schema.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import time
+import types
+import typing
 from typing import Any, Iterable, Mapping
 
 import numpy as np
@@ -71,14 +74,39 @@ def _flatten(prefix: str, value: Any, out: dict[str, Any]) -> None:
         out[prefix] = value
 
 
+def _placeholder_value(hint: Any) -> Any:
+    """A value of type ``hint``: True, 0, 0.0, '', an empty list or dict, a tuple of such;
+    ``X | None`` gives X's (the column's type is X's)."""
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin in (types.UnionType, typing.Union):
+        return _placeholder_value(next(a for a in args if a is not type(None)))
+    if origin is tuple:
+        return tuple(_placeholder_value(a) for a in args)
+    simple = {bool: True, int: 0, float: 0.0, str: ""}
+    if hint in simple:
+        return simple[hint]
+    if (origin or hint) in (list, dict):
+        return (origin or hint)()
+    raise TypeError(f"no placeholder for a field of type {hint!r}")
+
+
+def _placeholder(cls: type, **given: Any) -> Any:
+    """An instance of the dataclass ``cls`` built from its definition: the fields in
+    ``given`` with those values, every other field a value of its declared type
+    (:func:`_placeholder_value`). A field added to a result class needs no change here."""
+    hints = typing.get_type_hints(cls)
+    return cls(**{f.name: given[f.name] if f.name in given else _placeholder_value(hints[f.name])
+                  for f in dataclasses.fields(cls)})
+
+
 def _metric_templates() -> dict[str, Any]:
     """Every flattened metric column with a value of its type: the analysis results built
-    with placeholder values, so the column names are the analysis' own keys."""
-    step = iso7401.StepResult(0.0, 0.0, {
-        ch: iso7401.StepMetrics(ch, 0.0, 0.0, 0.0, 0.0, 0.0, True, [], 0.0)
-        for ch in STEP_CHANNELS}, 0.0)
-    steady = iso4138.SteadyStateHandling(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, (0.0, 0.0), {}, [], 0.0)
-    lane = lane_change.LaneChangeResult(0.0, True, 0)
+    from their definitions with placeholder values (:func:`_placeholder`), so the column
+    names and types are the analysis' own."""
+    step = _placeholder(iso7401.StepResult, responses={
+        ch: _placeholder(iso7401.StepMetrics, channel=ch) for ch in STEP_CHANNELS})
+    steady = _placeholder(iso4138.SteadyStateHandling)
+    lane = _placeholder(lane_change.LaneChangeResult)
     out: dict[str, Any] = {}
     for prefix, result in (("iso7401", step), ("iso4138", steady), ("iso3888", lane)):
         _flatten(prefix, result.to_dict(), out)

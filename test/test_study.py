@@ -675,3 +675,35 @@ def load_bag_of(path):
     from fourws_analysis.bag import load_bag
 
     return load_bag(path)
+
+
+def test_metric_columns_come_from_the_result_definitions(tmp_path):
+    """A result class gives its study columns by its field types alone (a field added to a
+    metric needs no placeholder written by hand): a dataclass of every kind of field the
+    analysis results use gets, by hand, True, 0, 0.0 (also for float | None), (0.0, 0.0),
+    [], {} and '', and the given fields keep their values; the study's columns of the ISO
+    7401 steady yaw gain, settling and the ISO 3888 sections driven are float64, bool and
+    int64 (the fields' types in iso7401 and lane_change)."""
+    import dataclasses
+
+    from fourws_study import point
+
+    @dataclasses.dataclass
+    class Result:
+        settled: bool
+        count: int
+        value: float
+        maybe: float | None
+        span: tuple[float, float]
+        notes: list[str]
+        curves: dict[str, np.ndarray]
+        label: str = "x"
+
+    got = point._placeholder(Result, count=7)
+    assert dataclasses.astuple(got) == (True, 7, 0.0, 0.0, (0.0, 0.0), [], {}, "")
+    columns = dict(point.columns(_study(tmp_path, "cols", scenario=_scenario(STEP),
+                                        grid={"speed_kmh": [60.0]})))
+    assert columns["iso7401.yaw_rate_radps.steady_state_gain_radps_per_rad_road_wheel"] \
+        == "float64"
+    assert columns["iso7401.yaw_rate_radps.settled"] == "bool"
+    assert columns["iso3888.sections_driven"] == "int64"
