@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -63,10 +64,14 @@ STEER_REFERENCES = {
 }
 
 Progress = Callable[[str], None]
-#: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options.
-_SWEEP_CACHE: dict[str, Any] = {}
+#: Results kept per cache below, the most recently used (a sweep is about 2 kB): a long Monte
+#: Carlo study, whose every vehicle has its own, does not keep them all.
+_CACHE_SIZE = 256
+#: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options, least
+#: recently used first.
+_SWEEP_CACHE: OrderedDict[str, linearize.EigenSweep | None] = OrderedDict()
 #: Level comparisons (critical speeds per model level) likewise.
-_LEVELS_CACHE: dict[str, Any] = {}
+_LEVELS_CACHE: OrderedDict[str, critical_speeds.LevelComparison | None] = OrderedDict()
 #: Open-loop 8-DOF Jacobians at straight running already computed in this process, by vehicle
 #: and speed (a run's overlays, its sampled loop and the points of a study share them).
 _JACOBIAN_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -398,18 +403,33 @@ def _sampled_models(res: RunAnalysis, vehicle: Any, speed: float, period: float,
             res.sampled[model] = loop
 
 
+def _cached(cache: OrderedDict[str, Any], key: str, compute: Callable[[], Any]) -> Any:
+    """``cache[key]``, computed by ``compute`` the first time; ``cache`` keeps the
+    :data:`_CACHE_SIZE` most recently used results."""
+    if key in cache:
+        cache.move_to_end(key)
+        return cache[key]
+    found = cache[key] = compute()
+    if len(cache) > _CACHE_SIZE:
+        cache.popitem(last=False)  # the least recently used
+    return found
+
+
+def _law_key(res: RunAnalysis, vehicle: Any, belief: Any, options: Mapping[str, Any]) -> str:
+    """The key of what depends on the car, the run's law, its belief and its options."""
+    return json.dumps([vehicle.cache_key(), res.law,
+                       belief.cache_key() if belief is not None else None, dict(options)],
+                      sort_keys=True, default=str)
+
+
 def _levels(res: RunAnalysis, vehicle: Any, belief: Any,
             options: Mapping[str, Any]) -> critical_speeds.LevelComparison | None:
     """Every model level's critical and characteristic speeds of the run's car, FWS and its
     law (built as the run built it), shared by the runs of one car and law."""
-    key = json.dumps([vehicle.cache_key(), res.law,
-                      belief.cache_key() if belief is not None else None, dict(options)],
-                     sort_keys=True, default=str)
-    if key not in _LEVELS_CACHE:
-        _LEVELS_CACHE[key] = _try(res, "critical_speeds", lambda: critical_speeds.compare_levels(
-            vehicle, make_law(res.law, belief if belief is not None else vehicle,
-                              **dict(options))))
-    return _LEVELS_CACHE[key]
+    return _cached(_LEVELS_CACHE, _law_key(res, vehicle, belief, options),
+                   lambda: _try(res, "critical_speeds", lambda: critical_speeds.compare_levels(
+                       vehicle, make_law(res.law, belief if belief is not None else vehicle,
+                                         **dict(options)))))
 
 
 def _try(result: RunAnalysis, metric: str, fn: Callable[[], Any]) -> Any:
@@ -438,6 +458,33 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
         Called with a short description before each step.
     """
     tick = progress or (lambda _msg: None)
+    res, ch = _start(run)
+    tick(f"{run.name}: linear models")
+    setting = _law_setting(res)
+    if models and setting.vehicle is not None and math.isfinite(res.speed_mps):
+        _overlays(res, setting)
+        tick(f"{run.name}: critical speeds per model level")
+        res.levels = _levels(res, setting.vehicle, setting.belief, setting.options)
+    elif not models:
+        res.notes.append("linear model overlays not asked for")
+    _frequency_response(res, ch, tick)
+    _step_response(res, ch, tick)
+    _steady_state(res, ch, setting.vehicle, tick)
+    _iso3888(res, ch, tick)
+    found, why = standards.standard_metrics(run, ch, setting.vehicle)  # FMVSS 126, ISO 17288
+    res.standards.update(found)
+    res.unavailable.update(why)
+    if eig_sweep and setting.vehicle is not None and setting.vehicle.body is not None:
+        tick(f"{run.name}: 8-DOF eigenvalues vs speed")
+        res.eig_sweep = _eigen_sweep(res, setting)
+    return res
+
+
+def _start(run: UniformRun) -> tuple[RunAnalysis, dict[str, np.ndarray]]:
+    """The analysis of ``run`` before any metric (its speed, whether its maneuver is known)
+    and the channels the metrics read: the recorded ones, with the driver's front road-wheel
+    command as the front angle where the run has it (the models' input; the applied angle
+    adds roll steer)."""
     try:
         speed = _speed(run)
     except MetricUnavailableError as exc:
@@ -446,18 +493,31 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
     else:
         notes = []
     res = RunAnalysis(run=run, speed_mps=speed, notes=notes)
-    man = run.maneuver
-    if not man:
+    if not run.maneuver:
         res.notes.append("maneuver not recognized (run_config has no maneuver.type): "
                          "metrics chosen from the data are skipped")
     ch = dict(run.channels)
-    t = run.time_s
     if "front_wheel_angle_cmd_rad" in ch:
-        # the driver's command is the models' input; the applied angle includes roll steer
         ch["front_wheel_angle_rad"] = ch["front_wheel_angle_cmd_rad"]
         res.steer_reference = "commanded"
+    return res, ch
 
-    tick(f"{run.name}: linear models")
+
+@dataclass(frozen=True)
+class _LawSetting:
+    """What the run's law is rebuilt from (run config): the true vehicle (None: not in the
+    config), the controller's belief (None: the true one), the law's options with the period
+    it ran at (s; None: not in the config)."""
+
+    vehicle: Any
+    belief: Any
+    options: Mapping[str, Any]
+    period: float | None
+
+
+def _law_setting(res: RunAnalysis) -> _LawSetting:
+    """The run's :class:`_LawSetting`; sets ``res.vehicle`` and ``res.steering_ratio``."""
+    run = res.run
     vehicle = _try(res, "model_overlays", lambda: _vehicle(run))
     res.vehicle = vehicle
     if vehicle is not None and vehicle.steering is not None:
@@ -470,132 +530,144 @@ def analyze_run(run: UniformRun, *, eig_sweep: bool = True, models: bool = True,
     period = _law_period(run)
     if period is not None:
         options = {**options, "control_period_s": period}
-    if models and vehicle is not None and math.isfinite(speed):
-        for model in ("2dof", "3dof"):
-            if model == "3dof" and vehicle.roll is None:
-                continue
-            sys_ = _try(res, f"model_{model}",
-                        lambda m=model: linear.linear_system(vehicle, m, speed, res.law,
-                                                             belief, options))
-            if sys_ is not None:
-                res.models[model] = sys_
-        if vehicle.body is not None:
-            sys8 = _try(res, "model_8dof_linearized",
-                        lambda: eightdof_linear_system(vehicle, speed, res.law,
-                                                       belief, options))
-            if sys8 is not None:
-                res.models["8dof-lin"] = sys8
-        if period is not None:
-            _sampled_models(res, vehicle, speed, period, belief, options)
-        tick(f"{run.name}: critical speeds per model level")
-        res.levels = _levels(res, vehicle, belief, options)
-    elif not models:
-        res.notes.append("linear model overlays not asked for")
+    return _LawSetting(vehicle, belief, options, period)
 
-    # frequency response
-    if man in fq.FREQUENCY_MANEUVERS:
-        tick(f"{run.name}: frequency response")
-        method = "transient" if man in fq.TRANSIENT_MANEUVERS else "welch"
-        for inp in FR_INPUTS:
-            if inp not in ch:
-                res.unavailable[f"frequency_response/{inp}"] = f"no {inp} recorded"
-                continue
-            for out in fq.OUTPUTS:
-                if out not in ch or (out == "roll_rad" and not np.any(ch[out])):
-                    continue
-                key = f"{out}/{inp}"
-                fr = _try(res, f"frequency_response/{key}", lambda o=out, i=inp: (
-                    fq.estimate_response(ch[i], ch[o], run.dt_s, method=method, output=o,
-                                         input_name=i)))
-                if fr is None:
-                    continue
-                res.frequency[key] = fr
-                met = _try(res, f"frequency_metrics/{key}",
-                           lambda f=fr: fq.response_metrics(f))
-                if met is not None:
-                    res.frequency_metrics[key] = met
-    else:
+
+def _overlays(res: RunAnalysis, setting: _LawSetting) -> None:
+    """The linear models closed with the run's law (``res.models``: the 2-DOF, the 3-DOF
+    with roll data, the linearized 8-DOF with body data) and each sampled at the law's
+    period (``res.sampled``)."""
+    vehicle, belief, options, speed = (setting.vehicle, setting.belief, setting.options,
+                                       res.speed_mps)
+    for model in ("2dof", "3dof"):
+        if model == "3dof" and vehicle.roll is None:
+            continue
+        sys_ = _try(res, f"model_{model}",
+                    lambda m=model: linear.linear_system(vehicle, m, speed, res.law,
+                                                         belief, options))
+        if sys_ is not None:
+            res.models[model] = sys_
+    if vehicle.body is not None:
+        sys8 = _try(res, "model_8dof_linearized",
+                    lambda: eightdof_linear_system(vehicle, speed, res.law, belief, options))
+        if sys8 is not None:
+            res.models["8dof-lin"] = sys8
+    if setting.period is not None:
+        _sampled_models(res, vehicle, speed, setting.period, belief, options)
+
+
+def _frequency_response(res: RunAnalysis, ch: Mapping[str, np.ndarray],
+                        tick: Progress) -> None:
+    """Frequency responses and their metrics of a run with an excitation band."""
+    run, man = res.run, res.run.maneuver
+    if man not in fq.FREQUENCY_MANEUVERS:
         res.unavailable["frequency_response"] = (
             f"needs a {', '.join(fq.FREQUENCY_MANEUVERS)} run (an excitation band); "
             f"this run is {man or 'unrecognized'}")
+        return
+    tick(f"{run.name}: frequency response")
+    method = "transient" if man in fq.TRANSIENT_MANEUVERS else "welch"
+    for inp in FR_INPUTS:
+        if inp not in ch:
+            res.unavailable[f"frequency_response/{inp}"] = f"no {inp} recorded"
+            continue
+        for out in fq.OUTPUTS:
+            if out not in ch or (out == "roll_rad" and not np.any(ch[out])):
+                continue
+            key = f"{out}/{inp}"
+            fr = _try(res, f"frequency_response/{key}", lambda o=out, i=inp: (
+                fq.estimate_response(ch[i], ch[o], run.dt_s, method=method, output=o,
+                                     input_name=i)))
+            if fr is None:
+                continue
+            res.frequency[key] = fr
+            met = _try(res, f"frequency_metrics/{key}", lambda f=fr: fq.response_metrics(f))
+            if met is not None:
+                res.frequency_metrics[key] = met
 
-    # ISO 7401 step and modes
-    if man in STEP_MANEUVERS or man == "pulse":
-        tick(f"{run.name}: step metrics and modes")
-        if man in STEP_MANEUVERS:
-            responses = {k: ch[k] for k in ("yaw_rate_radps", "lateral_accel_mps2") if k in ch}
-            res.step = _try(res, "iso7401_step", lambda: iso7401.step_metrics(
-                t, ch["front_wheel_angle_rad"], responses, ch.get("sideslip_rad"),
-                steering_wheel_rad=ch.get("steering_wheel_angle_rad"),
-                rear_wheel_rad=ch.get("rear_wheel_angle_rad")))
-            if res.step is not None and res.steer_reference == "commanded":
-                win = (t >= res.step.hold_end_s - iso7401.STEADY_WINDOW_S) \
-                    & (t <= res.step.hold_end_s)
-                applied = run.channels["front_wheel_angle_rad"]
-                cmd = ch["front_wheel_angle_rad"]
-                den = float(np.mean(cmd[win]) - cmd[0])
-                if den != 0.0:
-                    res.applied_to_commanded = float(np.mean(applied[win]) - applied[0]) / den
-        outs = [ch[k] for k in ("yaw_rate_radps", "lateral_velocity_mps") if k in ch]
-        res.modes = _try(res, "identified_modes", lambda: identify.identify_modes(
-            t, ch["front_wheel_angle_rad"], outs, order=2))
-    else:
+
+def _step_response(res: RunAnalysis, ch: Mapping[str, np.ndarray], tick: Progress) -> None:
+    """ISO 7401 step metrics (with the applied over commanded front angle) and the
+    identified modes of a step or pulse run."""
+    run, man, t = res.run, res.run.maneuver, res.run.time_s
+    if man not in STEP_MANEUVERS and man != "pulse":
         res.unavailable["iso7401_step"] = (f"needs a step_steer or ramp_steer run; this run is "
                                            f"{man or 'unrecognized'}")
+        return
+    tick(f"{run.name}: step metrics and modes")
+    if man in STEP_MANEUVERS:
+        responses = {k: ch[k] for k in ("yaw_rate_radps", "lateral_accel_mps2") if k in ch}
+        res.step = _try(res, "iso7401_step", lambda: iso7401.step_metrics(
+            t, ch["front_wheel_angle_rad"], responses, ch.get("sideslip_rad"),
+            steering_wheel_rad=ch.get("steering_wheel_angle_rad"),
+            rear_wheel_rad=ch.get("rear_wheel_angle_rad")))
+        if res.step is not None and res.steer_reference == "commanded":
+            win = (t >= res.step.hold_end_s - iso7401.STEADY_WINDOW_S) \
+                & (t <= res.step.hold_end_s)
+            applied = run.channels["front_wheel_angle_rad"]
+            cmd = ch["front_wheel_angle_rad"]
+            den = float(np.mean(cmd[win]) - cmd[0])
+            if den != 0.0:
+                res.applied_to_commanded = float(np.mean(applied[win]) - applied[0]) / den
+    outs = [ch[k] for k in ("yaw_rate_radps", "lateral_velocity_mps") if k in ch]
+    res.modes = _try(res, "identified_modes", lambda: identify.identify_modes(
+        t, ch["front_wheel_angle_rad"], outs, order=2))
 
-    # ISO 4138
-    if man in STEADY_MANEUVERS:
-        tick(f"{run.name}: steady-state handling")
 
-        def steady() -> iso4138.SteadyStateHandling:
-            if vehicle is None:
-                raise MetricUnavailableError("understeer gradient needs the wheelbase "
-                                             "(vehicle mapping in run_config)")
-            settle = t >= t[0] + 2.0  # skip the start transient
-            return iso4138.steady_state_handling(
-                ch["lateral_accel_mps2"][settle], ch["front_wheel_angle_rad"][settle],
-                ch["yaw_rate_radps"][settle], ch["speed_mps"][settle],
-                vehicle.chassis.wheelbase_m,
-                ch["sideslip_rad"][settle] if "sideslip_rad" in ch else None,
-                ch["roll_rad"][settle] if "roll_rad" in ch else None,
-                steering_wheel_rad=ch["steering_wheel_angle_rad"][settle]
-                if "steering_wheel_angle_rad" in ch else None)
-        res.steady = _try(res, "iso4138_steady_state", steady)
-    else:
+def _steady_state(res: RunAnalysis, ch: Mapping[str, np.ndarray], vehicle: Any,
+                  tick: Progress) -> None:
+    """ISO 4138 steady-state gradients of a slow ramp or constant-radius run."""
+    run, man, t = res.run, res.run.maneuver, res.run.time_s
+    if man not in STEADY_MANEUVERS:
         res.unavailable["iso4138_steady_state"] = (
             f"needs a slow_ramp_steer or constant_radius run; this run is "
             f"{man or 'unrecognized'}")
+        return
+    tick(f"{run.name}: steady-state handling")
 
-    # ISO 3888-2
-    if man == "double_lane_change":
-        tick(f"{run.name}: lane change")
-        res.lane_change = _try(res, "iso3888_lane_change",
-                               lambda: lane_change.lane_change_of_run(
-                                   ch["x_m"], ch["y_m"], run.config["maneuver"]))
-    else:
+    def steady() -> iso4138.SteadyStateHandling:
+        if vehicle is None:
+            raise MetricUnavailableError("understeer gradient needs the wheelbase "
+                                         "(vehicle mapping in run_config)")
+        settle = t >= t[0] + 2.0  # skip the start transient
+        return iso4138.steady_state_handling(
+            ch["lateral_accel_mps2"][settle], ch["front_wheel_angle_rad"][settle],
+            ch["yaw_rate_radps"][settle], ch["speed_mps"][settle],
+            vehicle.chassis.wheelbase_m,
+            ch["sideslip_rad"][settle] if "sideslip_rad" in ch else None,
+            ch["roll_rad"][settle] if "roll_rad" in ch else None,
+            steering_wheel_rad=ch["steering_wheel_angle_rad"][settle]
+            if "steering_wheel_angle_rad" in ch else None)
+    res.steady = _try(res, "iso4138_steady_state", steady)
+
+
+def _iso3888(res: RunAnalysis, ch: Mapping[str, np.ndarray], tick: Progress) -> None:
+    """ISO 3888-2 clearance and pass/fail of a double lane change."""
+    run, man = res.run, res.run.maneuver
+    if man != "double_lane_change":
         res.unavailable["iso3888_lane_change"] = (f"needs a double_lane_change run; this run "
                                                   f"is {man or 'unrecognized'}")
-    # FMVSS 126, ISO 17288
-    found, why = standards.standard_metrics(run, ch, vehicle)
-    res.standards.update(found)
-    res.unavailable.update(why)
+        return
+    tick(f"{run.name}: lane change")
+    res.lane_change = _try(res, "iso3888_lane_change",
+                           lambda: lane_change.lane_change_of_run(
+                               ch["x_m"], ch["y_m"], run.config["maneuver"]))
 
-    if eig_sweep and vehicle is not None and vehicle.body is not None:
-        tick(f"{run.name}: 8-DOF eigenvalues vs speed")
 
-        def sweep() -> linearize.EigenSweep:
-            rows = [eightdof_linear_system(vehicle, v, res.law, belief, options).poles()
-                    for v in SWEEP_SPEEDS_MPS]
-            width = max(len(_lateral_modes(r)) for r in rows)
-            arr = np.full((len(rows), width), np.nan, dtype=complex)
-            for k, r in enumerate(rows):
-                lat = _lateral_modes(r)
-                arr[k, :lat.size] = lat
-            return linearize.EigenSweep("8dof", np.asarray(SWEEP_SPEEDS_MPS), arr)
-        key = json.dumps([vehicle.cache_key(), res.law,
-                          belief.cache_key() if belief is not None else None, dict(options)],
-                         sort_keys=True, default=str)
-        if key not in _SWEEP_CACHE:  # runs of one vehicle and law share their sweep
-            _SWEEP_CACHE[key] = _try(res, "eigenvalues_vs_speed", sweep)
-        res.eig_sweep = _SWEEP_CACHE[key]
-    return res
+def _eigen_sweep(res: RunAnalysis, setting: _LawSetting) -> linearize.EigenSweep | None:
+    """The lateral eigenvalues of the linearized 8-DOF closed with the run's law at
+    :data:`SWEEP_SPEEDS_MPS`, shared by the runs of one vehicle, law, belief and options
+    (:data:`_SWEEP_CACHE`); None if they cannot be computed (``res.unavailable`` says why)."""
+    vehicle, belief, options = setting.vehicle, setting.belief, setting.options
+
+    def sweep() -> linearize.EigenSweep:
+        rows = [eightdof_linear_system(vehicle, v, res.law, belief, options).poles()
+                for v in SWEEP_SPEEDS_MPS]
+        width = max(len(_lateral_modes(r)) for r in rows)
+        arr = np.full((len(rows), width), np.nan, dtype=complex)
+        for k, r in enumerate(rows):
+            lat = _lateral_modes(r)
+            arr[k, :lat.size] = lat
+        return linearize.EigenSweep("8dof", np.asarray(SWEEP_SPEEDS_MPS), arr)
+    return _cached(_SWEEP_CACHE, _law_key(res, vehicle, belief, options),
+                   lambda: _try(res, "eigenvalues_vs_speed", sweep))

@@ -547,3 +547,37 @@ def test_default_report_names_the_roll_oversteer_and_the_sol1_spike(engineer: di
     assert fws["overshoot_is_spike"] is False
     assert "default-sol1: the lateral-acceleration overshoot (48 %) is one spike" in \
         first.replace("&#x27;", "'")
+
+
+def test_eigenvalue_sweeps_are_kept_for_the_most_recent_vehicles_only(monkeypatch) -> None:
+    """The 8-DOF eigenvalue sweeps a process keeps are bounded (a long Monte Carlo study has
+    one vehicle per sample): with room for 2, the sweep of a third vehicle evicts the least
+    recently used one (least recently used by hand: car 0 used again after car 1, so car 1
+    goes), a kept sweep is returned itself, an evicted one is computed again with the same
+    numbers; its first row is the fws loop's lateral eigenvalues at the sweep's first speed
+    (eightdof_linear_system)."""
+    from collections import OrderedDict
+    from types import SimpleNamespace
+
+    from fourws_analysis import compare as C
+
+    monkeypatch.setattr(C, "_SWEEP_CACHE", OrderedDict())
+    monkeypatch.setattr(C, "_CACHE_SIZE", 2)
+    cars = [load_vehicle("table_8_1").with_axle_tires(s) for s in (0.8, 1.0, 1.2)]
+    res = SimpleNamespace(law="fws", unavailable={})
+
+    def sweep(car):  # type: ignore[no-untyped-def]
+        return C._eigen_sweep(res, C._LawSetting(car, None, {}, None))
+
+    first, second = sweep(cars[0]), sweep(cars[1])
+    assert sweep(cars[0]) is first
+    third = sweep(cars[2])
+    assert len(C._SWEEP_CACHE) == 2
+    assert sweep(cars[0]) is first and sweep(cars[2]) is third
+    again = sweep(cars[1])
+    assert again is not second
+    assert again.eigenvalues.tobytes() == second.eigenvalues.tobytes()
+    assert len(C._SWEEP_CACHE) == 2 and res.unavailable == {}
+    lateral = C._lateral_modes(eightdof_linear_system(cars[0], C.SWEEP_SPEEDS_MPS[0]).poles())
+    row = first.eigenvalues[0]
+    assert np.array_equal(np.sort_complex(row[~np.isnan(row)]), np.sort_complex(lateral))
