@@ -44,9 +44,11 @@ Sub-steps: the right-hand side also reports the rate of the fastest slip mode (a
 ``_AUX_RATE``); the RK4 and Euler loops read it from their first stage and, where the step is
 too long for it (a light or slowly rolling wheel), take the step in ``eightdof.substeps``
 equal sub-steps in a separate compiled function. In normal driving the arithmetic is that of a
-plain step, bit for bit, and the check costs a comparison per step. One RK4 step is written
-once (:func:`_rk4_step`, over flat arrays, its right-hand side a parameter of
-:func:`_rk4_stepper`): the simulator's loop, its sub-steps and the lanes take it.
+plain step, bit for bit, and the check costs a comparison per step. The integrators' float
+operations over flat arrays are written once (:func:`_advance`, :func:`_rk4_sum`,
+:func:`_accept`) for the simulator's loop, its sub-steps and the lanes; each loop keeps only
+its own stage sequence (where the right-hand side is inlined or called, where sub-steps are
+decided).
 """
 
 from __future__ import annotations
@@ -433,12 +435,14 @@ def _rk4_sum(x, k1, k2, k3, k4, sixth, out, n):  # type: ignore[no-untyped-def]
 
 def _accept(x, xt, n):  # type: ignore[no-untyped-def]
     """Copy ``xt`` into ``x`` if every number is finite; whether it was."""
+    ok = True
     for j in range(n):
         if not math.isfinite(xt[j]):
-            return False
-    for j in range(n):
-        x[j] = xt[j]
-    return True
+            ok = False
+    if ok:
+        for j in range(n):
+            x[j] = xt[j]
+    return ok
 
 
 def _substeps(rate, dt_over_bound):  # type: ignore[no-untyped-def]
@@ -460,35 +464,6 @@ _substeps_inline = _jit_inline(_substeps)
 #: Rows of the integrators' work array: the four RK4 stage derivatives, the stage state, the
 #: state at the start of a step taken in sub-steps.
 _K1, _K2, _K3, _K4, _XT, _X0 = 0, 1, 2, 3, 4, 5
-
-
-def _rk4_stepper(rhs_terms):  # type: ignore[no-untyped-def]
-    """:func:`_rk4_step` calling ``rhs_terms`` (the inlined or the called right-hand side)."""
-    def _rk4_step(x, u, q, pt, cf, cr, h, work, aux, h_over_bound):  # type: ignore
-        """One RK4 step of ``h`` from ``x`` into ``work[_XT]`` (``x`` unchanged), its stage
-        derivatives in ``work[_K1:_K4 + 1]``. Returns 1, or the number of sub-steps the first
-        stage's slip rate needs for a step of ``h`` (``h_over_bound = h / RK4_RATE_BOUND``;
-        0 never asks) and nothing else done. One call site of the right-hand side for the
-        four stages (stage s starts from x + h_s k_{s-1} with h_s = h/2, h/2, h): LLVM does
-        not unroll the loop into four copies of it (first compile time)."""
-        half = 0.5 * h
-        xt = work[_XT]
-        for stage in range(4):
-            if stage == 0:
-                rhs_terms(x, u, q, pt, cf, cr, work[_K1], aux)
-                n_sub = _substeps_inline(aux[a_rate], h_over_bound)
-                if n_sub > 1:
-                    return n_sub
-            else:
-                _advance(x, work[stage - 1], h if stage == 3 else half, xt, N_STATE)
-                rhs_terms(xt, u, q, pt, cf, cr, work[stage], aux)
-        _rk4_sum(x, work[_K1], work[_K2], work[_K3], work[_K4], h / 6.0, xt, N_STATE)
-        return 1
-    return _jit_inline(_rk4_step)
-
-
-_rk4_step_inline = _rk4_stepper(_rhs_inline)
-_rk4_step_called = _rk4_stepper(_rhs_called)
 
 
 def _take_input(u, u_held):  # type: ignore[no-untyped-def]
@@ -513,13 +488,21 @@ def _rk4_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no
     slowly rolling wheel); False, with ``x`` restored to the step's start, if a state became
     non-finite. Calls the compiled right-hand side (not inlined: the first compile stays as
     fast as before)."""
+    xt = work[_XT]
     x0 = work[_X0]
     for j in range(N_STATE):
         x0[j] = x[j]
     h = dt / n_sub
+    half = 0.5 * h
+    sixth = h / 6.0
     for _ in range(n_sub):
-        _rk4_step_called(x, u, q, pt, cf, cr, h, work, aux, 0.0)
-        if not _accept(x, work[_XT], N_STATE):
+        # the stages of rk4's step (stage s starts from x + h_s k_{s-1}, h_s = h/2, h/2, h)
+        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
+        for stage in range(1, 4):
+            _advance(x, work[stage - 1], h if stage == 3 else half, xt, N_STATE)
+            _rhs_called(xt, u, q, pt, cf, cr, work[stage], aux)
+        _rk4_sum(x, work[_K1], work[_K2], work[_K3], work[_K4], sixth, xt, N_STATE)
+        if not _accept(x, xt, N_STATE):
             for j in range(N_STATE):
                 x[j] = x0[j]
             return False
@@ -540,42 +523,49 @@ def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
             return -1
     work = np.empty((6, N_STATE))
     aux = np.empty(N_AUX)
+    xt = work[_XT]
     pt = _parameter_terms_inline(q)
+    half = 0.5 * dt
+    sixth = dt / 6.0
     dt_over_bound = dt / RK4_BOUND
     for step in range(n):
-        n_sub = _rk4_step_inline(x, u, q, pt, cf, cr, dt, work, aux, dt_over_bound)
+        # one inlined right-hand side for the four stages (stage s starts from
+        # x + h_s k_{s-1} with h_s = dt/2, dt/2, dt); a loop over the four, as LLVM does not
+        # unroll it into four copies of the right-hand side (first compile time). Written
+        # here and not as a function shared with _rk4_substeps: a step inlined from a
+        # function of its own ran 10 % slower (measured)
+        n_sub = 1
+        for stage in range(4):
+            if stage == 0:
+                _rhs_inline(x, u, q, pt, cf, cr, work[_K1], aux)
+                n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
+                if n_sub > 1:
+                    break
+            else:
+                _advance(x, work[stage - 1], dt if stage == 3 else half, xt, N_STATE)
+                _rhs_inline(xt, u, q, pt, cf, cr, work[stage], aux)
         if n_sub > 1:
             if not _rk4_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
                 return step
-        elif not _accept(x, work[_XT], N_STATE):
+            continue
+        _rk4_sum(x, work[_K1], work[_K2], work[_K3], work[_K4], sixth, xt, N_STATE)
+        if not _accept(x, xt, N_STATE):
             return step
     return n
-
-
-def _euler_step(x, u, q, pt, cf, cr, h, work, aux, h_over_bound):  # type: ignore
-    """One explicit-Euler step of ``h`` from ``x`` into ``work[_XT]`` (as :func:`_rk4_step`,
-    bound ``EULER_RATE_BOUND``)."""
-    _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
-    n_sub = _substeps_inline(aux[a_rate], h_over_bound)
-    if n_sub > 1:
-        return n_sub
-    _advance(x, work[_K1], h, work[_XT], N_STATE)
-    return 1
-
-
-_euler_step = _jit_inline(_euler_step)
 
 
 def _euler_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
     """One explicit-Euler step of ``dt`` in ``n_sub`` equal sub-steps (as
     :func:`_rk4_substeps`)."""
+    xt = work[_XT]
     x0 = work[_X0]
     for j in range(N_STATE):
         x0[j] = x[j]
     h = dt / n_sub
     for _ in range(n_sub):
-        _euler_step(x, u, q, pt, cf, cr, h, work, aux, 0.0)
-        if not _accept(x, work[_XT], N_STATE):
+        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
+        _advance(x, work[_K1], h, xt, N_STATE)
+        if not _accept(x, xt, N_STATE):
             for j in range(N_STATE):
                 x[j] = x0[j]
             return False
@@ -591,14 +581,18 @@ def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
             return -1
     work = np.empty((6, N_STATE))
     aux = np.empty(N_AUX)
+    xt = work[_XT]
     pt = _parameter_terms_inline(q)
     dt_over_bound = dt / EULER_BOUND
     for step in range(n):
-        n_sub = _euler_step(x, u, q, pt, cf, cr, dt, work, aux, dt_over_bound)
+        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
+        n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
         if n_sub > 1:
             if not _euler_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
                 return step
-        elif not _accept(x, work[_XT], N_STATE):
+            continue
+        _advance(x, work[_K1], dt, xt, N_STATE)
+        if not _accept(x, xt, N_STATE):
             return step
     return n
 
@@ -811,7 +805,7 @@ def rk4_lanes(X, IN, OUT, K, XT, RATE, active, dt, n_steps,  # type: ignore[no-u
     half = 0.5 * dt
     dt_over_bound = dt / RK4_BOUND
     for _step in range(n_steps):
-        # the stages of :func:`_rk4_step`, of every lane at once
+        # the stages of rk4's step, of every lane at once
         for stage in range(4):
             if stage == 0:
                 for i in range(n_x):
