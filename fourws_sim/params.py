@@ -39,7 +39,7 @@ from typing import Any, ClassVar, Mapping
 
 from fourws_sim.config_yaml import plain_copy, read_yaml
 from fourws_sim.errors import ParameterError, UnknownNameError, describe
-from fourws_sim.tires import TIRES
+from fourws_sim.tires import TIRES, get_tire
 
 
 def find_resource_dir(beside: Path, package: str, sub: str, marker: str) -> Path:
@@ -602,11 +602,9 @@ class Tire:
                 raise ParameterError(f"{prefix}{group}",
                                      f"must be a mapping, got {describe(values)}", source)
             if values:
-                # numba (the tire modules are compiled kernels): only a file with coefficients
-                # pays for it; their names and signs are the tire module's, checked at load
-                # for every tool, not only by the tools that integrate the tire
-                from fourws_sim.tires import get_tire
-
+                # get_tire imports the tire module (numba): only a file with coefficients pays
+                # for it; their names and signs are the tire module's, checked at load for
+                # every tool, not only by the tools that integrate the tire
                 get_tire(group).pack_mapping(values, source, prefix=f"{prefix}{group}.")
             for key, v in values.items():
                 name = f"{prefix}{group}.{key}"
