@@ -73,6 +73,8 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             "controller_node": controller,
             "maneuver_node": NODE_NAMES[Role.MANEUVER],
             "startup_timeout_s": 0.0,
+            # the course markers (cones, target line) of the scene
+            "maneuver_json": dumps_config(config.maneuver.to_dict()),
         },
         NODE_NAMES[Role.MANEUVER]: {
             "maneuver_json": dumps_config(config.maneuver.to_dict()),

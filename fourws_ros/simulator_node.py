@@ -42,18 +42,20 @@ starts paused (the launcher un-pauses it once the graph is complete).
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import sys
 import time
 from typing import Any
 
-from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
-                                SetParametersResult)
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
 from fourws_ros import conversions, peers, reporting, topics
 from fourws_ros.identity import PublisherNames
+from fourws_ros.scene_publisher import ScenePublisher
+from fourws_ros.simulator_params import declare_parameters
 from fourws_ros.runtime import EXIT_PEERS, report_phase, run_node
 from fourws_run import codecs
 from fourws_run.clock_modes import (CLOCK_MODES, DRIVER_INPUT, LockstepClock, RealtimeClock,
@@ -61,11 +63,10 @@ from fourws_run.clock_modes import (CLOCK_MODES, DRIVER_INPUT, LockstepClock, Re
 from fourws_run.ticks import FlowWindow, InputLimits, Tick, TickEngine, whole_multiple
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.maneuvers import make_maneuver
 from fourws_sim.params import Tire
 from fourws_sim.simulator import Simulator
 
-#: Shortest/longest integration step a parameter may set, s.
-MIN_STEP_S, MAX_STEP_S = 1e-5, 0.1
 #: Period of the housekeeping timer (start, lockstep waits, the final status), s.
 HOUSEKEEPING_S = 0.01
 #: After the simulation ended: how long (wall) the final status waits for the recorder to
@@ -74,15 +75,8 @@ FINAL_WAIT_S = 10.0
 #: Topics whose counts the simulator knows for flow control: its own recorded publications
 #: and the answers it accepted.
 FLOW_TOPICS = (topics.STATE, topics.ODOM, topics.IMU, topics.SIM_STATUS, topics.DRIVER_INPUT,
-               topics.REAR_STEER_CMD)
-
-
-def _frange(lo: float, hi: float) -> list[FloatingPointRange]:
-    return [FloatingPointRange(from_value=lo, to_value=hi)]
-
-
-def _irange(lo: int, hi: int) -> list[IntegerRange]:
-    return [IntegerRange(from_value=lo, to_value=hi, step=1)]
+               topics.REAR_STEER_CMD, topics.TF, topics.MARKERS, topics.TF_STATIC,
+               topics.ROBOT_DESCRIPTION)
 
 
 class SimulatorNode(Node):
@@ -94,7 +88,7 @@ class SimulatorNode(Node):
 
     def __init__(self) -> None:
         super().__init__("fourws_simulator")
-        self._declare_parameters()
+        declare_parameters(self)
         self._cfg: dict[str, Any] = {name: self._param(name) for name in self._LIVE}
         self.add_on_set_parameters_callback(self._on_set)
         self.finished = False  # run_node: stop spinning
@@ -117,83 +111,6 @@ class SimulatorNode(Node):
             + ("" if self._run_wanted else " (paused)"))
 
     # ------------------------------------------------------------------ setup
-    def _declare_parameters(self) -> None:
-        ro = dict(read_only=True)
-        declare = self.declare_parameter
-        declare("vehicle", "table_8_1", ParameterDescriptor(
-            description="vehicle (config/vehicles name or YAML path)", **ro))
-        declare("vehicle_json", "", ParameterDescriptor(
-            description="the simulated vehicle as a whole vehicle-file mapping in JSON "
-                        "(overrides vehicle when not empty)", **ro))
-        declare("model", "8dof", ParameterDescriptor(
-            description="vehicle model (fourws_sim.models name)", **ro))
-        declare("tire", "", ParameterDescriptor(
-            description="tire model override ('' = the vehicle file's)", **ro))
-        declare("integrator", "rk4", ParameterDescriptor(description="integrator name", **ro))
-        declare("integration_step_s", 1e-3, ParameterDescriptor(
-            description="integration step, s",
-            floating_point_range=_frange(MIN_STEP_S, MAX_STEP_S), **ro))
-        declare("control_period_s", 0.01, ParameterDescriptor(
-            description="control period (driver/controller tick), s; whole multiple of the "
-                        "integration step", floating_point_range=_frange(MIN_STEP_S, 1.0), **ro))
-        declare("state_period_s", 0.01, ParameterDescriptor(
-            description="realtime: state publish period, s; whole multiple of the step",
-            floating_point_range=_frange(MIN_STEP_S, 1.0), **ro))
-        declare("viz_period_s", 0.02, ParameterDescriptor(
-            description="odometry/IMU publish period (simulation time), s",
-            floating_point_range=_frange(MIN_STEP_S, 10.0)))
-        declare("status_period_s", 0.1, ParameterDescriptor(
-            description="sim_status publish period (simulation time), s",
-            floating_point_range=_frange(1e-3, 10.0)))
-        declare("clock_mode", "lockstep", ParameterDescriptor(
-            description="lockstep | realtime", **ro))
-        declare("initial_speed_mps", 23.611111111111111, ParameterDescriptor(
-            description="forward speed at reset, m/s", floating_point_range=_frange(0.0, 100.0)))
-        declare("answer_timeout_s", 60.0, ParameterDescriptor(
-            description="wall time to wait for a lockstep tick's answers (realtime: for the "
-                        "first state's) before the run stops as failed (no tick runs on an "
-                        "input that was not sent), s",
-            floating_point_range=_frange(1e-3, 3600.0)))
-        declare("command_stale_periods", 10, ParameterDescriptor(
-            description="realtime: a rear-steer command is fresh while the state it answers "
-                        "is at most this many control periods old (simulation time); a tick "
-                        "without a fresh command applies zero rear steer and is counted",
-            integer_range=_irange(1, 100000)))
-        declare("driver_timeout_s", 1.0, ParameterDescriptor(
-            description="realtime: simulation time without a new driver input after which "
-                        "the run stops (the maneuver node stopped answering), s",
-            floating_point_range=_frange(1e-3, 60.0)))
-        declare("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
-            description="wall time to wait for the run's other nodes before giving up with "
-                        "a line naming the missing ones, s (0: wait forever)",
-            floating_point_range=_frange(0.0, 86400.0), **ro))
-        declare("autostart", True, ParameterDescriptor(
-            description="start running once the graph is complete (false: paused until "
-                        "/fourws/pause false)"))
-        declare("controller_node", topics.NODE_NAMES[topics.Role.CONTROLLER], ParameterDescriptor(
-            description="ROS node name of the controller (named when it stops answering; "
-                        "realtime takes commands only from it)", read_only=True))
-        declare("maneuver_node", topics.NODE_NAMES[topics.Role.MANEUVER], ParameterDescriptor(
-            description="ROS node name of the driver (named when it stops answering; "
-                        "realtime takes driver inputs only from it)", read_only=True))
-        declare("exit_when_done", True, ParameterDescriptor(
-            description="exit once the run has ended and everything published is delivered "
-                        "(false: stay up, paused)"))
-        declare("expected_state_subscribers", 0, ParameterDescriptor(
-            description="wait for this many /fourws/state subscribers before the first tick "
-                        "(used when expected_subscribers_json does not name the topic)",
-            integer_range=_irange(0, 64), **ro))
-        declare("realtime_priority", 20, ParameterDescriptor(
-            description="realtime: SCHED_FIFO priority of the integration thread (1-99; 0 = "
-                        "normal scheduling). Needs CAP_SYS_NICE; without it the node warns "
-                        "and runs with normal priority", integer_range=_irange(0, 99),
-            read_only=True))
-        declare("recorder_window", 0, ParameterDescriptor(
-            description="lockstep: run at most this many messages of any recorded topic "
-                        "ahead of what the recorder reports stored (0 = no recorder flow "
-                        "control; must stay below the stream history depth)",
-            integer_range=_irange(0, topics.STREAM_DEPTH // 2), read_only=True))
-
     def _param(self, name: str) -> Any:
         return self.get_parameter(name).value
 
@@ -266,6 +183,11 @@ class SimulatorNode(Node):
         self._state_encoder = codecs.StateEncoder(self.model_name, topics.FRAME_BODY)
         self._odom_encoder = codecs.OdometryEncoder(topics.FRAME_ODOM, topics.FRAME_BODY)
         self._imu_encoder = codecs.ImuEncoder(topics.FRAME_BODY)
+        self._end_s = float(self._param("end_time_s"))
+        self.scene: ScenePublisher | None = None
+        if bool(self._param("publish_scene")):
+            self.scene = ScenePublisher(self, self.counts, self.vehicle, self._maneuver(),
+                                        float(self._param("path_period_s")))
         self.create_service(Trigger, topics.SRV_RESET, self._on_reset)
         self.create_service(SetBool, topics.SRV_PAUSE, self._on_pause)
         config = {
@@ -314,7 +236,8 @@ class SimulatorNode(Node):
     # ------------------------------------------------------------------ the sink of the clock
     def publish_tick(self, tick: Tick) -> bool:
         """Publish ``tick``: state (first: the answers' critical path starts there), clock,
-        then odometry/IMU/status when due."""
+        then the scene's transforms, odometry/IMU/markers and status when due; at
+        ``end_time_s`` end the run after this state."""
         try:
             raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
         except conversions.NonFiniteError as exc:
@@ -323,14 +246,30 @@ class SimulatorNode(Node):
         self.state_pub.publish(raw)
         self.clock_pub.publish(codecs.encode_clock(tick.t))
         t = tick.t
-        if t >= self._next_viz_s - 1e-12:
+        viz_due = t >= self._next_viz_s - 1e-12
+        if self.scene is not None:
+            self.scene.publish(tick, viz_due)
+        if viz_due:
             self.odom_pub.publish(self._odom_encoder.encode(tick.outputs, tick.stamp_ns))
             self.imu_pub.publish(self._imu_encoder.encode(tick.outputs, tick.stamp_ns))
             self._next_viz_s = t + self._cfg["viz_period_s"]
         if t >= self._next_status_s - 1e-12:
             self._publish_status(t)
             self._next_status_s = t + self._cfg["status_period_s"]
+        if self._end_s > 0.0 and t >= self._end_s - 1e-12:
+            self.end(f"end time {self._end_s:g} s reached", False)
+            return False
         return True
+
+    def _maneuver(self) -> Any:
+        """The run's maneuver (``maneuver_json``), for the scene's course; None without."""
+        text = str(self._param("maneuver_json"))
+        if not text:
+            return None
+        try:
+            return make_maneuver(json.loads(text), self.vehicle)
+        except json.JSONDecodeError as exc:
+            raise ParameterError("maneuver_json", f"not JSON ({exc})") from None
 
     def report_wait(self, t: float) -> None:
         """A tick has waited a second: a status says for what."""
@@ -425,6 +364,8 @@ class SimulatorNode(Node):
             response.message = "pause the realtime simulation before a reset"
             return response
         self.clock = self._make_clock()
+        if self.scene is not None:
+            self.scene.restart()
         self.ended = ""
         self.stop_reason = ""
         self._final_sent = False
