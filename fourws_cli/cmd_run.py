@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import shlex
+import socket
 import sys
 import time
 from pathlib import Path
@@ -31,6 +32,26 @@ from fourws_control import available_laws
 from fourws_sim.errors import ParameterError, UnknownNameError
 
 HELP = "run a scenario (default: config/scenarios/default.yaml) through the ROS 2 node graph"
+#: Default port of ``--live`` (the Foxglove app's default WebSocket connection).
+LIVE_PORT = 8765
+
+
+def check_port_free(port: int, host: str = "127.0.0.1") -> None:
+    """Refuse a port that is in use (before anything of the run is created).
+
+    Raises
+    ------
+    ParameterError
+        Out of range or in use (names ``--live``).
+    """
+    if not 1 <= port <= 65535:
+        raise ParameterError("--live", f"port must be 1-65535, got {port}")
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        try:
+            probe.bind((host, port))
+        except OSError as exc:
+            raise ParameterError("--live", f"port {port} on {host} is in use "
+                                 f"({exc.strerror or exc}); give another: --live PORT") from None
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -55,6 +76,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="replace a run folder of the same name")
     parser.add_argument("--clock", choices=("lockstep", "realtime"), default=None,
                         help="override the scenario's clock mode")
+    parser.add_argument("--live", nargs="?", type=int, const=LIVE_PORT, default=None,
+                        metavar="PORT",
+                        help=f"watch the run live in Foxglove: a Foxglove WebSocket server on "
+                             f"127.0.0.1:PORT (default {LIVE_PORT}) serving the car, its markers "
+                             "and the state while the run goes on")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,6 +117,8 @@ def run(args: argparse.Namespace) -> int:
         for law in laws:
             if law not in available_laws():
                 raise UnknownNameError("law", law, available_laws())
+    if args.live is not None:
+        check_port_free(args.live)
     out = args.out if args.out is not None else Path(scenario.recording.output_dir)
     records = []
     for law in laws:
@@ -108,7 +136,8 @@ def run(args: argparse.Namespace) -> int:
         for member in members:
             config = RunConfig.from_scenario(scenario, law, controller, maneuver=member)
             name = _run_name(args.name, scenario.name, law, member, len(laws) > 1)
-            record = run_graph(config, out, run_name=name, overwrite=args.overwrite)
+            record = run_graph(config, out, run_name=name, overwrite=args.overwrite,
+                               live_port=args.live)
             records.append(record)
             print("\n".join(record.summary_lines()), flush=True)
             if record.interrupted:

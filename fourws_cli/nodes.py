@@ -21,6 +21,7 @@ NODES: dict[str, str] = {
     "recorder": "fourws_ros.recorder_node",
     "replay": "fourws_ros.replay_node",
     "example_controller": "fourws_ros.example_controller",
+    "live_view": "fourws_ros.live_view_node",
 }
 
 

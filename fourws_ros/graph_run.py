@@ -58,6 +58,8 @@ NODE_EXIT_S = 40.0
 #: Realtime: simulation time beyond the maneuver's duration after which a run the maneuver
 #: did not end fails, s.
 REALTIME_OVERRUN_S = 2.0
+#: Process name of the live view (``fourws run --live``).
+LIVE_VIEW = "fourws_live_view"
 #: SCHED_FIFO priority of the answer chain (simulator, maneuver, controller), when permitted
 #: (speed only; the verdict never depends on it: a realtime run whose answers come late says
 #: so, as stale commands).
@@ -121,7 +123,8 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
               overwrite: bool = False, echo: Callable[[str], None] | None = None,
               replay_driver_from: Path | None = None,
               node_overrides: dict[str, dict[str, Any]] | None = None,
-              on_running: Callable[[ProcessGroup], None] | None = None) -> RunRecord:
+              on_running: Callable[[ProcessGroup], None] | None = None,
+              live_port: int | None = None) -> RunRecord:
     """Run ``config`` through the real node graph, recording a bag.
 
     Parameters
@@ -145,6 +148,9 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
     on_running : callable, optional
         Called once with the process group when the simulation has started (tests inject
         faults).
+    live_port : int, optional
+        Serve the run over the Foxglove WebSocket protocol on 127.0.0.1 at this port (the
+        live view node beside the run's; its exit never fails the run).
 
     Returns
     -------
@@ -194,6 +200,8 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         ros: LauncherNode | None = None
         try:
             _start_nodes(config, group, params_file, names, driver_node, bag_path is not None)
+            if live_port is not None:
+                _start_live_view(group, live_port)
             echo(f"fourws run {config.scenario or 'run'} / {config.law}: "
                  f"{len(group.children)} nodes on ROS domain {lease.domain_id} "
                  f"({config.clock_mode}), logs in {run_dir / 'logs'}")
@@ -263,6 +271,23 @@ def _start_nodes(config: RunConfig, group: ProcessGroup, params_file: Path, name
         except OSError as exc:
             raise LaunchError(f"cannot start {name} ({' '.join(cmd[:3])}...): "
                               f"{exc.strerror or exc}") from None
+
+
+def _start_live_view(group: ProcessGroup, port: int) -> None:
+    """The live view node (:mod:`fourws_ros.live_view_node`), optional in the group.
+
+    Raises
+    ------
+    LaunchError
+        It cannot be started.
+    """
+    try:
+        group.start(LIVE_VIEW, node_command("live_view", params={"port": int(port)}))
+    except OSError as exc:
+        raise LaunchError(f"cannot start the live view: {exc.strerror or exc}") from None
+    group.optional.add(LIVE_VIEW)
+    group.echo(f"  live view: ws://127.0.0.1:{port} (Foxglove: open connection, Foxglove "
+               "WebSocket)")
 
 
 def _write_record(record: RunRecord, echo: Callable[[str], None]) -> None:
@@ -446,6 +471,8 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             group.stop([sim, man, ctrl])
         if group.has(rec):
             group.stop([rec], grace_s=RECORDER_GRACE_S)
+        if group.has(LIVE_VIEW):
+            group.stop([LIVE_VIEW])
     except BaseException:
         group.kill_all()
         raise
