@@ -53,7 +53,7 @@ from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
 from fourws_ros import conversions, peers, reporting, topics
-from fourws_ros.identity import PublisherNames
+from fourws_ros.identity import PublisherNames, RunNodeFilter
 from fourws_ros.scene_publisher import ScenePublisher
 from fourws_ros.simulator_params import declare_parameters
 from fourws_ros.runtime import EXIT_PEERS, report_phase, run_node
@@ -169,7 +169,10 @@ class SimulatorNode(Node):
                                  self._on_recorder_status, topics.STATUS_QOS)
         self._recorder = reporting.RecorderWatch(self, subscribe=False)
         self._recorder_seen = int(self._param("recorder_window")) == 0
-        self._names = PublisherNames(self)
+        self._run_nodes = RunNodeFilter(
+            PublisherNames(self), lambda role_param: str(self._param(role_param)),
+            lambda topic, detail: self.clock.rejections.add(topic, "not from the run's node",
+                                                            detail))
         self.peers = peers.PeerWatch(self, float(self._param("startup_timeout_s")))
         state_subscribers = self.matched.expected.get(
             topics.STATE, int(self._param("expected_state_subscribers")))
@@ -302,16 +305,6 @@ class SimulatorNode(Node):
         return sent
 
     # ------------------------------------------------------------------ inputs
-    def _from(self, topic: str, info: Any, role_param: str) -> bool:
-        """Realtime: whether a message comes from the run's node ``role_param`` names (a
-        foreign one is refused and counted)."""
-        node = self._names.of(topic, info)
-        if node == self._param(role_param):
-            return True
-        self.clock.rejections.add(topic, "not from the run's node",
-                                  f"publisher {node or '(unknown)'}")
-        return False
-
     def _on_driver(self, raw: bytes) -> None:
         try:
             stamp, cmd = codecs.parse_driver_input(raw)
@@ -321,8 +314,7 @@ class SimulatorNode(Node):
         self.clock.offer_driver(stamp, cmd)
 
     def _on_driver_from(self, raw: bytes, info: Any) -> None:
-        if self._from(topics.DRIVER_INPUT, info, "maneuver_node"):
-            self._on_driver(raw)
+        self._run_nodes.offer(topics.DRIVER_INPUT, info, "maneuver_node", raw, self._on_driver)
 
     def _on_cmd(self, raw: bytes) -> None:
         try:
@@ -333,8 +325,8 @@ class SimulatorNode(Node):
         self.clock.offer_command(msg["state_step"], msg["state_stamp_ns"], msg["angle_rad"])
 
     def _on_cmd_from(self, raw: bytes, info: Any) -> None:
-        if self._from(topics.REAR_STEER_CMD, info, "controller_node"):
-            self._on_cmd(raw)
+        self._run_nodes.offer(topics.REAR_STEER_CMD, info, "controller_node", raw,
+                              self._on_cmd)
 
     def _on_maneuver_status(self, msg: Any) -> None:
         if not msg.done or self.ended:
@@ -390,6 +382,7 @@ class SimulatorNode(Node):
         if self.ended:
             self._try_final()
             return
+        self._run_nodes.poll()
         clock = self.clock
         if not clock.started:
             why = self.peers.check_startup()
