@@ -41,6 +41,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": ["fourws = fourws_cli.main:main"]
-        + [f"fourws-{name} = {module}:main" for name, module in NODES.items()],
+        + [f"fourws-{name} = {entry if ':' in entry else entry + ':main'}"
+           for name, entry in NODES.items()],
     },
 )

@@ -67,6 +67,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--controller-name", metavar="NAME", default=None,
                         help="ROS node name of --controller (default fourws_controller; the "
                              "launcher remaps the node to it)")
+    parser.add_argument("--driver", metavar="CMD", default=None,
+                        help="drive from outside instead of the maneuver's driver: 'ackermann' "
+                             "(ackermann_msgs/AckermannDriveStamped on /drive, e.g. an F1TENTH "
+                             "stack), 'joy' (sensor_msgs/Joy on /joy: a gamepad, or fourws node "
+                             "keyboard_driver), or your own driver node (a command, quoted); "
+                             "see docs/driver-contract.md")
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
                         help="output folder (default: the scenario's recording.output_dir)")
     parser.add_argument("--name", default=None, metavar="RUN",
@@ -87,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the scenario; returns the exit code."""
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
     # rosbags, mcap: not for --help
-    from fourws_run.config import USER_LAW, ControllerSpec, RunConfig
+    from fourws_run.config import INPUT_DRIVERS, USER_LAW, ControllerSpec, RunConfig
     from fourws_run.record import EXIT_CODES, Outcome  # rosbags, mcap: not for --help
     from fourws_run.scenario import load_scenario  # rosbags, mcap: not for --help
     from fourws_run.series import scenario_runs  # rosbags, mcap: not for --help
@@ -119,6 +125,13 @@ def run(args: argparse.Namespace) -> int:
                 raise UnknownNameError("law", law, available_laws())
     if args.live is not None:
         check_port_free(args.live)
+    driver: tuple[str, ...] = ()
+    if args.driver is not None:
+        driver = tuple(shlex.split(args.driver))
+        if not driver:
+            raise ParameterError("--driver", "must be ackermann, joy or a command")
+        if driver[0] not in INPUT_DRIVERS or len(driver) > 1:
+            ControllerSpec(driver).check_runnable("--driver")
     out = args.out if args.out is not None else Path(scenario.recording.output_dir)
     records = []
     for law in laws:
@@ -135,6 +148,8 @@ def run(args: argparse.Namespace) -> int:
                                  "maneuvers of their own")
         for member in members:
             config = RunConfig.from_scenario(scenario, law, controller, maneuver=member)
+            if driver:
+                config = config.replace(driver=driver)
             name = _run_name(args.name, scenario.name, law, member, len(laws) > 1)
             record = run_graph(config, out, run_name=name, overwrite=args.overwrite,
                                live_port=args.live)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib
 import sys
 
-#: Node name -> module with a ``main(args) -> int``.
+#: Node name -> module with a ``main(args) -> int`` (``module:function`` for another entry).
 NODES: dict[str, str] = {
     "simulator": "fourws_ros.simulator_node",
     "maneuver": "fourws_ros.maneuver_node",
@@ -22,6 +22,8 @@ NODES: dict[str, str] = {
     "replay": "fourws_ros.replay_node",
     "example_controller": "fourws_ros.example_controller",
     "live_view": "fourws_ros.live_view_node",
+    "ackermann_driver": "fourws_ros.input_driver_node:ackermann_main",
+    "joy_driver": "fourws_ros.input_driver_node:joy_main",
 }
 
 
@@ -35,5 +37,6 @@ def run_node(argv: list[str]) -> int:
         print(f"fourws node: error: unknown node {name!r}; valid: {', '.join(NODES)}",
               file=sys.stderr)
         return 2
-    module = importlib.import_module(NODES[name])
-    return int(module.main([f"fourws_{name}", *rest]) or 0)
+    module_name, _, function = NODES[name].partition(":")
+    module = importlib.import_module(module_name)
+    return int(getattr(module, function or "main")([f"fourws_{name}", *rest]) or 0)

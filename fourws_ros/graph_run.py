@@ -169,7 +169,7 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
     bag_path = run_dir / "bag" if config.recorded_topics else None
     params = node_params.node_parameters(config, bag_path)
     names = _node_names(config)
-    driver_node = "maneuver"
+    driver_node = config.driver_node  # '' for a user's driver command
     if replay_driver_from is not None:
         driver_node = "replay"
         params[names.maneuver] = {"bag_path": str(replay_driver_from),
@@ -262,8 +262,12 @@ def _start_nodes(config: RunConfig, group: ProcessGroup, params_file: Path, name
     else:
         starts.append((names.controller, user_command(config.controller.command)
                        + ros_args(params_file, node_name=names.controller)))
-    starts.append((names.maneuver, node_command(driver_node, params_file,
-                                                node_name=names.maneuver)))
+    if driver_node:
+        starts.append((names.maneuver, node_command(driver_node, params_file,
+                                                    node_name=names.maneuver)))
+    else:  # a user's driver (docs/driver-contract.md) in the maneuver's role
+        starts.append((names.maneuver, user_command(config.driver)
+                       + ros_args(params_file, node_name=names.maneuver)))
     starts.append((names.simulator, node_command("simulator", params_file)))
     for name, cmd in starts:
         try:
@@ -446,14 +450,17 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             # the simulation ended: the simulator, the maneuver and a built-in controller
             # deliver what they published and exit on their own, and the recorder closes the
             # bag once it holds everything
-            left = group.wait_exit([sim, man], NODE_EXIT_S, poll)
+            # a user's driver, like a user's controller, may never exit by itself
+            left = group.wait_exit([sim, man] if config.driver_node else [sim], NODE_EXIT_S,
+                                   poll)
             if left:
                 echo(f"  {', '.join(left)} did not exit after the run; stopping")
                 group.stop(left)
             # the recorder can only close a complete bag once the maneuver's final counts
             # are in; without them (a stopped or dead maneuver node) it is stopped below and
             # closes the bag with what it has
-            if bag_path is not None and group.has(rec) and state.maneuver_end is not None:
+            if bag_path is not None and group.has(rec) and (
+                    state.maneuver_end is not None or not config.driver_node):
                 left = group.wait_exit([rec], RECORDER_GRACE_S, poll)
                 if left:
                     detail = (state.recorder.detail if state.recorder is not None
@@ -464,7 +471,7 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             # never exit by itself)
             if config.controller.builtin:
                 group.wait_exit([ctrl], 5.0, poll)
-            group.stop([ctrl])
+            group.stop([ctrl] if config.driver_node else [ctrl, man])
         else:
             # stopped early: the nodes publish their final counts and deliver on SIGINT; the
             # recorder drains and closes the bag with what it has

@@ -93,10 +93,16 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             **gate,
         },
     }
+    if not config.driver_node:
+        # a user's driver (docs/driver-contract.md) does not report counts or end the run:
+        # the simulator ends it at the maneuver's duration, the recorder counts the driver's
+        # messages by their sequence numbers (as a user controller's)
+        params[NODE_NAMES[Role.SIMULATOR]]["end_time_s"] = float(config.maneuver.duration_s)
     if records:
         params[NODE_NAMES[Role.RECORDER]] = {
             "bag_path": str(bag_path), "topics": list(config.recorded_topics),
-            "controller_node": controller, "startup_timeout_s": 0.0}
+            "controller_node": controller, "startup_timeout_s": 0.0,
+            "maneuver_reports": bool(config.driver_node)}
     return params
 
 
