@@ -24,6 +24,7 @@ NODES: dict[str, str] = {
     "live_view": "fourws_ros.live_view_node",
     "ackermann_driver": "fourws_ros.input_driver_node:ackermann_main",
     "joy_driver": "fourws_ros.input_driver_node:joy_main",
+    "keyboard_driver": "fourws_ros.keyboard_driver_node",
 }
 
 

@@ -16,7 +16,7 @@ from another stack or a person (the core: :mod:`fourws_sim.input_drivers`):
   command older than ``command_timeout_s`` (wall time) is stale.
 * ``joy``: ``sensor_msgs/Joy`` on ``/joy`` (a gamepad's ``joy`` node or ``fourws node
   keyboard_driver``): each state with the latest axes (older than ``command_timeout_s``:
-  stale), mapping from ``joy_mapping_json`` (``config/params/joy.yaml``).
+  stale), mapping from ``joy_mapping_file`` (default ``config/drivers/joy.yaml``).
 
 A command that is not finite or not plausible is refused, a stale tick (straight ahead,
 braking) counted: both in ``ManeuverStatus.rejected_*`` (and the run record).
@@ -24,7 +24,6 @@ braking) counted: both in ``ManeuverStatus.rejected_*`` (and the run record).
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from typing import Any, Callable
@@ -34,9 +33,11 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from fourws_ros import conversions, topics
 from fourws_ros.maneuver_node import ManeuverNode
 from fourws_ros.runtime import run_node
+from fourws_sim.config_yaml import read_yaml
 from fourws_sim.errors import ParameterError
 from fourws_sim.input_drivers import (COMMAND_TIMEOUT_S, AckermannDriver, JoyDriver,
                                       joy_mapping_from)
+from fourws_sim.params import CONFIG_DIR
 
 #: Input sources: the topic each reads.
 SOURCES = {"ackermann": topics.DRIVE, "joy": topics.JOY}
@@ -54,21 +55,20 @@ class InputDriverNode(ManeuverNode):
             description="realtime: a command older than this (wall time) is stale; the car "
                         "then steers straight and brakes, s",
             floating_point_range=[FloatingPointRange(from_value=1e-3, to_value=60.0)]))
-        self.declare_parameter("joy_mapping_json", "", ParameterDescriptor(
-            description="joy: the axis mapping as JSON (config/params/joy.yaml; '' = the "
-                        "common pad layout)", read_only=True))
+        self.declare_parameter("joy_mapping_file", str(CONFIG_DIR / "drivers" / "joy.yaml"),
+                               ParameterDescriptor(
+            description="joy: YAML file with the axis mapping under joy_mapping (default: "
+                        "config/drivers/joy.yaml, the common pad layout)", read_only=True))
         timeout = float(self.get_parameter("command_timeout_s").value)
         vehicle = conversions.vehicle_from_params(self)
         if source == "ackermann":
             self.input: Any = AckermannDriver(vehicle, self.maneuver.spec.speed_hold, timeout)
         else:
-            text = str(self.get_parameter("joy_mapping_json").value)
-            try:
-                mapping = joy_mapping_from(json.loads(text) if text else None,
-                                           "parameter joy_mapping_json")
-            except json.JSONDecodeError as exc:
-                raise ParameterError("joy_mapping_json", f"not JSON ({exc})") from None
-            self.input = JoyDriver(vehicle, mapping, timeout)
+            path = str(self.get_parameter("joy_mapping_file").value)
+            data = read_yaml(path)
+            if not isinstance(data, dict) or "joy_mapping" not in data:
+                raise ParameterError("joy_mapping", "missing (a mapping of the axes)", path)
+            self.input = JoyDriver(vehicle, joy_mapping_from(data["joy_mapping"], path), timeout)
         self.lockstep = self.gate.lockstep
         self._waiting: list[dict[str, Any]] = []  # lockstep Ackermann: states awaiting /drive
         self._commands: dict[int, tuple[float, float]] = {}  # stamp -> (steer, speed)

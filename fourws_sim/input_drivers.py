@@ -111,7 +111,7 @@ class AckermannDriver:
 
 @dataclass(frozen=True)
 class JoyMapping:
-    """Which gamepad axis does what (YAML ``joy_mapping`` of ``config/params/joy.yaml``).
+    """Which gamepad axis does what (YAML ``joy_mapping`` of ``config/drivers/joy.yaml``).
 
     The defaults are the common pad layout of the ROS ``joy`` driver (Xbox-style): axis 0 the
     left stick's x (left +1), axis 5 the right trigger, axis 2 the left trigger (each +1
@@ -206,5 +206,50 @@ class JoyDriver:
                                                                 m.brake_front_fraction))
 
 
+class KeyboardAxes:
+    """A terminal's keys as the axes of the common pad layout (what ``fourws node
+    keyboard_driver`` publishes on ``/joy`` for :class:`JoyDriver`): ``a``/``d`` (or the
+    left/right arrows) steer by :attr:`STEER_STEP` of full lock per press, ``w``/``s`` (or
+    up/down) add throttle or brake by :attr:`PEDAL_STEP` (one pedal at a time: pressing one
+    releases the other), space returns to straight ahead with no pedal."""
+
+    STEER_STEP = 0.1
+    PEDAL_STEP = 0.25
+    #: key -> action (arrow keys arrive as the escape sequences' last byte)
+    KEYS = {"a": "left", "D": "left", "d": "right", "C": "right", "w": "throttle",
+            "A": "throttle", "s": "brake", "B": "brake", " ": "centre"}
+
+    def __init__(self, mapping: JoyMapping | None = None) -> None:
+        self.mapping = mapping or JoyMapping()
+        self.steer = 0.0
+        self.throttle = 0.0
+        self.brake = 0.0
+
+    def press(self, key: str) -> bool:
+        """A key; True if it is one of :attr:`KEYS`."""
+        action = self.KEYS.get(key)
+        if action == "left":
+            self.steer = min(self.steer + self.STEER_STEP, 1.0)
+        elif action == "right":
+            self.steer = max(self.steer - self.STEER_STEP, -1.0)
+        elif action == "throttle":
+            self.throttle, self.brake = min(self.throttle + self.PEDAL_STEP, 1.0), 0.0
+        elif action == "brake":
+            self.brake, self.throttle = min(self.brake + self.PEDAL_STEP, 1.0), 0.0
+        elif action == "centre":
+            self.steer = self.throttle = self.brake = 0.0
+        return action is not None
+
+    def axes(self) -> list[float]:
+        """The ``Joy`` axes (triggers +1 released, -1 pressed) under :attr:`mapping`."""
+        m = self.mapping
+        out = [0.0] * (max(m.steer_axis, m.throttle_axis, m.brake_axis) + 1)
+        out[m.steer_axis] = self.steer
+        out[m.throttle_axis] = 1.0 - 2.0 * self.throttle
+        out[m.brake_axis] = 1.0 - 2.0 * self.brake
+        return out
+
+
 __all__ = ["AckermannDriver", "COMMAND_TIMEOUT_S", "InputBook", "JoyDriver", "JoyMapping",
+           "KeyboardAxes",
            "STEER_LIMIT_RAD", "joy_mapping_from"]

@@ -28,9 +28,11 @@ from fourws_run.bagfile import read_bag, typestore
 from fourws_run.closed_loop import run_closed_loop
 from fourws_run.config import RunConfig
 from fourws_run.scenario import load_scenario
+from fourws_sim.config_yaml import read_yaml
 from fourws_sim.drivers import DriverCommand
-from fourws_sim.input_drivers import AckermannDriver, JoyDriver, JoyMapping
-from fourws_sim.params import load_vehicle
+from fourws_sim.input_drivers import (AckermannDriver, JoyDriver, JoyMapping, KeyboardAxes,
+                                      joy_mapping_from)
+from fourws_sim.params import CONFIG_DIR, load_vehicle
 
 HERE = Path(__file__).resolve().parent
 
@@ -139,3 +141,24 @@ def test_the_joy_mapping():
     assert not joy.offer([1.5, 0.0, 1.0, 0.0, 0.0, 0.0], now_s=0.2)   # beyond [-1, 1]
     assert not joy.offer([0.0, 0.0], now_s=0.2)                        # too few axes
     assert joy.book.rejections == {"impossible values": 2}
+
+
+def test_the_keyboard_gives_the_pads_axes():
+    """Two presses of d, three of w: steer -0.2, throttle 0.75 (trigger axis 1 - 2 * 0.75);
+    s releases the throttle; through the joy mapping the steering wheel turns -0.2 * pi/2."""
+    keys = KeyboardAxes()
+    for key in "ddwww":
+        assert keys.press(key)
+    axes = keys.axes()
+    assert (axes[0], axes[5], axes[2]) == (-0.2, -0.5, 1.0)
+    joy = JoyDriver(load_vehicle("table_8_1"))
+    assert joy.offer(axes, now_s=0.0)
+    assert joy.command(0.0, {}, 0.0).steering_wheel_angle_rad == pytest.approx(-0.2 * math.pi / 2)
+    keys.press("s")
+    assert keys.throttle == 0.0 and keys.brake == 0.25 and not keys.press("x")
+
+
+def test_the_shipped_pad_mapping_is_the_default():
+    """config/drivers/joy.yaml holds JoyMapping's defaults (the common pad layout)."""
+    path = Path(CONFIG_DIR) / "drivers" / "joy.yaml"
+    assert joy_mapping_from(read_yaml(path)["joy_mapping"], str(path)) == JoyMapping()
