@@ -224,7 +224,12 @@ class ManeuverNode(Node):
 
     def _on_sim_status(self, msg: Any) -> None:
         """The simulation ended before the maneuver did (it diverged, or stopped for a node
-        that stopped answering): report the final counts with ``end`` ``stopped``."""
+        that stopped answering): report the final counts with ``end`` ``stopped``. A peer's
+        announced failure that already arrived comes first (the simulator checks its peers
+        ten times as often as this node: its final status, caused by that failure, can
+        overtake this node's own check)."""
+        if msg.final and not self.done:
+            self._check_peers()
         if msg.final and not self.done and self.gate.admits_final(float(msg.sim_time_s)):
             t = float(msg.sim_time_s)
             self._finish(conversions.time_to_ns(t), t, "stopped",
