@@ -4,7 +4,7 @@
 
 ``fourws run ... --live [PORT]`` starts it beside the run's nodes, ``fourws node live_view``
 by hand. It bridges the run's topics as they are (:data:`LIVE_TOPICS`: the car's frames, its
-URDF and markers, the state, driver input, rear-steer command, odometry and status): each
+URDF and markers, the state, driver input, rear-steer command, odometry and IMU): each
 becomes a Foxglove channel with message encoding ``cdr`` and its ``ros2msg`` definition (the
 text the bags carry, from the typestore), so the Foxglove app decodes the messages as it
 decodes a fourws bag, and the shipped layout (``config/foxglove/fourws.json``) shows a live run
@@ -43,7 +43,7 @@ from fourws_sim.errors import ParameterError
 #: The topics a live view serves by default.
 LIVE_TOPICS = (topics.TF, topics.TF_STATIC, topics.ROBOT_DESCRIPTION, topics.MARKERS,
                topics.STATE, topics.DRIVER_INPUT, topics.REAR_STEER_CMD, topics.ODOM,
-               topics.IMU, topics.SIM_STATUS)
+               topics.IMU)
 #: Default port (the Foxglove app's default WebSocket connection).
 DEFAULT_PORT = 8765
 #: What the live view reads streams with (module docstring: never holds a writer back).

@@ -141,6 +141,17 @@ def expected_endpoints(config: RunConfig, recorded: bool) -> list[tuple[str, str
         # contract obliges a user's controller to wait for each tick's driver input too
         (topics.DRIVER_INPUT, "sub", ctrl),
     ]
+    # the status topics are volatile: every node that reads them must have matched before
+    # the first status, or it misses the first ones (counted, a matched count of 1 could be
+    # the simulator's or a viewer's reader, not the recorder's: the live view's load delayed
+    # the recorder by 1.3 s, and 13 of 301 statuses were lost to it)
+    launcher = NODE_NAMES[Role.LAUNCHER]
+    expected += [(topics.MANEUVER_STATUS, "sub", sim), (topics.MANEUVER_STATUS, "sub", launcher),
+                 (topics.SIM_STATUS, "sub", launcher)]
+    if config.driver_node:  # the maneuver role's node of fourws reads the simulator's status
+        expected.append((topics.SIM_STATUS, "sub", man))
+    if config.controller.builtin:
+        expected.append((topics.SIM_STATUS, "sub", ctrl))
     if recorded:
         rec = NODE_NAMES[Role.RECORDER]
         expected += [(t, "sub", rec) for t in config.recorded_topics]
