@@ -167,7 +167,7 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
     run_dir = prepare_run_dir(Path(out_dir), run_name or
                               f"{config.scenario or 'run'}-{config.law}-{stamp}", overwrite)
     bag_path = run_dir / "bag" if config.recorded_topics else None
-    params = node_params.node_parameters(config, bag_path)
+    params = node_params.node_parameters(config, bag_path, replay_driver_from is not None)
     names = _node_names(config)
     driver_node = config.driver_node  # '' for a user's driver command
     if replay_driver_from is not None:
@@ -210,7 +210,7 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
             ros = LauncherNode(lease.domain_id, node_params.dumps_config(config.to_dict()),
                                writers, state)
             failure = _drive(config, group, ros, state, interrupt, bag_path is not None, echo,
-                             on_running)
+                             on_running, replay_driver_from is not None)
         except LaunchError as exc:
             failure = str(exc)
         finally:
@@ -349,10 +349,10 @@ def _label_user_law(record: RunRecord, config: RunConfig) -> None:
 
 def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: RunState,
            interrupt: _Interrupt, recorded: bool, echo: Callable[[str], None],
-           on_running: Callable[[ProcessGroup], None] | None) -> str:
+           on_running: Callable[[ProcessGroup], None] | None, replay: bool = False) -> str:
     """Wait for the graph, start the simulation, follow it to its final status; '' or the
     failure."""
-    why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded)
+    why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded, replay)
     if why:
         return why
     # the answer chain: in lockstep it sets the pace, in realtime its answers must come

@@ -59,10 +59,10 @@ def _late_node(group: ProcessGroup, reporting: set[str], now: float) -> str:
 
 
 def wait_for_graph(config: RunConfig, group: ProcessGroup, ros: Any,
-                   interrupted: Callable[[], bool], recorded: bool) -> str:
+                   interrupted: Callable[[], bool], recorded: bool, replay: bool = False) -> str:
     """Wait until the graph of ``config`` is complete and the simulator's pause service is
     there; '' or why not (module docstring)."""
-    expected = node_params.expected_endpoints(config, recorded)
+    expected = node_params.expected_endpoints(config, recorded, replay)
     if recorded:
         expected.append((topics.RUN_CONFIG, "sub", topics.NODE_NAMES[topics.Role.RECORDER]))
     user = set() if config.controller.builtin else {config.controller.node_name}
