@@ -14,6 +14,8 @@ STAMP := $(VENV)/.fourws-setup-done
 MSGS_STAMP := $(VENV)/.fourws-msgs-done
 KERNELS_STAMP := $(VENV)/.fourws-kernels-done
 MSGS_BUILD := build/venv-interfaces
+# interface packages no ROS wheel provides, built before fourws's own (interfaces/SOURCE.md)
+VENDORED_INTERFACES := interfaces/tf2_msgs interfaces/ackermann_msgs
 LOCK_VENV := build/lock-venv
 
 .PHONY: setup test demo bench lock clean
@@ -36,21 +38,26 @@ $(STAMP): requirements.txt $(LOCK) setup.py Makefile
 	  || { cat $(VENV)/fourws-install.log; exit 1; }
 	@touch $(STAMP)
 
-# The message interfaces (the ament_cmake package of CMakeLists.txt, interfaces only) built
-# against the ROS wheels and installed into the venv prefix, so the generated messages import
-# with no extra environment. Rebuilt when a .msg or the package files change (or after the
-# venv was reinstalled).
-$(MSGS_STAMP): $(STAMP) $(wildcard msg/*.msg) CMakeLists.txt package.xml
-	@echo "setup 4/5: message interfaces (CMake against the ROS wheels, about 30 s; log $(MSGS_BUILD)/build.log)"
+# The message interfaces (the ament_cmake package of CMakeLists.txt, interfaces only, and the
+# vendored interface packages of interfaces/ that no ROS wheel provides: interfaces/SOURCE.md)
+# built against the ROS wheels and installed into the venv prefix, so the generated messages
+# import with no extra environment. Rebuilt when a .msg or the package files change (or after
+# the venv was reinstalled).
+$(MSGS_STAMP): $(STAMP) $(wildcard msg/*.msg) CMakeLists.txt package.xml cmake/drop_missing_wheel_includes.cmake \
+  $(wildcard interfaces/*/msg/*.msg interfaces/*/CMakeLists.txt interfaces/*/package.xml)
+	@echo "setup 4/5: message interfaces (CMake against the ROS wheels, about 1 min; log $(MSGS_BUILD)/build.log)"
 	@rm -rf $(MSGS_BUILD) && mkdir -p $(MSGS_BUILD)
-	@V=$(abspath $(VENV)); PATH=$$V/bin:$$PATH CMAKE_PREFIX_PATH=$$V AMENT_PREFIX_PATH=$$V \
-	  cmake -S . -B $(MSGS_BUILD) -DCMAKE_INSTALL_PREFIX=$$V -DFOURWS_INTERFACES_ONLY=ON \
-	  -DPython3_EXECUTABLE=$$V/bin/python -DBUILD_TESTING=OFF >$(MSGS_BUILD)/build.log 2>&1 \
-	  && PATH=$$V/bin:$$PATH cmake --build $(MSGS_BUILD) -j2 >>$(MSGS_BUILD)/build.log 2>&1 \
-	  && cmake --install $(MSGS_BUILD) >>$(MSGS_BUILD)/build.log 2>&1 \
-	  || { tail -30 $(MSGS_BUILD)/build.log; echo "message interface build failed, log: $(MSGS_BUILD)/build.log"; exit 1; }
-	@cd /tmp && $(abspath $(PY)) -c "from fourws.msg import VehicleState" \
-	  || { echo "the built messages do not import (from fourws.msg import VehicleState)"; exit 1; }
+	@V=$(abspath $(VENV)); for src in $(VENDORED_INTERFACES) .; do \
+	  b=$(MSGS_BUILD)/$$(basename $$(realpath $$src)); \
+	  PATH=$$V/bin:$$PATH CMAKE_PREFIX_PATH=$$V AMENT_PREFIX_PATH=$$V \
+	  cmake -S $$src -B $$b -DCMAKE_INSTALL_PREFIX=$$V -DFOURWS_INTERFACES_ONLY=ON \
+	  -DPython3_EXECUTABLE=$$V/bin/python -DBUILD_TESTING=OFF >>$(MSGS_BUILD)/build.log 2>&1 \
+	  && PATH=$$V/bin:$$PATH cmake --build $$b -j2 >>$(MSGS_BUILD)/build.log 2>&1 \
+	  && cmake --install $$b >>$(MSGS_BUILD)/build.log 2>&1 \
+	  || { tail -30 $(MSGS_BUILD)/build.log; echo "message interface build of $$src failed, log: $(MSGS_BUILD)/build.log"; exit 1; }; \
+	  done
+	@cd /tmp && $(abspath $(PY)) -c "from fourws.msg import VehicleState; from tf2_msgs.msg import TFMessage; from ackermann_msgs.msg import AckermannDriveStamped" \
+	  || { echo "the built messages do not import (fourws.msg, tf2_msgs.msg, ackermann_msgs.msg)"; exit 1; }
 	@touch $(MSGS_STAMP)
 
 # The simulator's numba kernels compiled into their disk cache (fourws_sim/warmup.py), so no

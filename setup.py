@@ -28,7 +28,8 @@ setup(
     data_files=[
         (f"share/{PACKAGE}/config/{sub}", glob(f"config/{sub}/*.{ext}"))
         for sub, ext in (("vehicles", "yaml"), ("maneuvers", "yaml"), ("scenarios", "yaml"),
-                         ("studies", "yaml"), ("params", "yaml"), ("dds", "xml"))
+                         ("studies", "yaml"), ("params", "yaml"), ("dds", "xml"),
+                         ("foxglove", "json"), ("drivers", "yaml"))
     ],
     # the Python libraries the code imports (ROS wheels: requirements.txt; ROS: package.xml)
     install_requires=["numpy", "scipy", "pyyaml", "numba", "control", "matplotlib", "rosbags",

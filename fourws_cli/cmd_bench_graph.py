@@ -44,6 +44,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="realtime state rate, Hz (default 200)")
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="keep the runs (bags, logs) in DIR")
+    parser.add_argument("--no-scene", action="store_true",
+                        help="without the car in 3D: the simulator publishes no /tf, "
+                             "/tf_static, /robot_description, /fourws/markers (the graph "
+                             "before them, for comparison)")
+    parser.add_argument("--live", nargs="?", type=int, const=8765, default=None,
+                        metavar="PORT", help="with a live view serving both runs (as "
+                                             "fourws run --live)")
 
 
 def _scenario(duration_s: float, **changes):
@@ -89,12 +96,26 @@ def run(args: argparse.Namespace) -> int:
     bounded("--state-rate-hz", args.state_rate_hz, 1.0, 1e4, " Hz")
     out = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="fourws-bench-"))
     quiet = (lambda _text: None) if args.json else None
-    result: dict[str, object] = {"load_average_before": os.getloadavg()[0]}
+    result: dict[str, object] = {"load_average_before": os.getloadavg()[0],
+                                 "scene": not args.no_scene, "live_view": args.live is not None}
+    scene_topics = (topics.TF, topics.TF_STATIC, topics.ROBOT_DESCRIPTION, topics.MARKERS)
+    extra: dict[str, object] = {"live_port": args.live}
+    if args.no_scene:
+        extra["node_overrides"] = {topics.NODE_NAMES[topics.Role.SIMULATOR]:
+                                   {"publish_scene": False}}
+
+    def config(scenario):
+        cfg = RunConfig.from_scenario(scenario, "sol1")
+        if args.no_scene:
+            cfg = dataclasses.replace(cfg, recorded_topics=tuple(
+                t for t in cfg.recorded_topics if t not in scene_topics))
+        return cfg
+
     ok = True
     try:
         if args.lockstep_seconds > 0:
-            lock = run_graph(RunConfig.from_scenario(_scenario(args.lockstep_seconds), "sol1"),
-                             out, run_name="lockstep", echo=quiet)
+            lock = run_graph(config(_scenario(args.lockstep_seconds)), out,
+                             run_name="lockstep", echo=quiet, **extra)
             ok &= lock.ok
             result.update({
                 "lockstep_ok": lock.ok, "lockstep_sim_s": lock.sim_time_s,
@@ -106,9 +127,9 @@ def run(args: argparse.Namespace) -> int:
             })
         if args.realtime_seconds > 0:
             period = 1.0 / args.state_rate_hz
-            rt = run_graph(RunConfig.from_scenario(
-                _scenario(args.realtime_seconds, clock_mode="realtime", state_period_s=period),
-                "sol1"), out, run_name="realtime", echo=quiet)
+            rt = run_graph(config(_scenario(args.realtime_seconds, clock_mode="realtime",
+                                            state_period_s=period)),
+                           out, run_name="realtime", echo=quiet, **extra)
             ok &= rt.ok
             state = load_bag(rt.bag_path, topics=[topics.STATE]).topics[topics.STATE]
             span = float(state.time_s[-1] - state.time_s[0]) if len(state) > 1 else 0.0

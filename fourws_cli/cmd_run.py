@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import shlex
+import socket
 import sys
 import time
 from pathlib import Path
@@ -31,6 +32,26 @@ from fourws_control import available_laws
 from fourws_sim.errors import ParameterError, UnknownNameError
 
 HELP = "run a scenario (default: config/scenarios/default.yaml) through the ROS 2 node graph"
+#: Default port of ``--live`` (the Foxglove app's default WebSocket connection).
+LIVE_PORT = 8765
+
+
+def check_port_free(port: int, host: str = "127.0.0.1") -> None:
+    """Refuse a port that is in use (before anything of the run is created).
+
+    Raises
+    ------
+    ParameterError
+        Out of range or in use (names ``--live``).
+    """
+    if not 1 <= port <= 65535:
+        raise ParameterError("--live", f"port must be 1-65535, got {port}")
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        try:
+            probe.bind((host, port))
+        except OSError as exc:
+            raise ParameterError("--live", f"port {port} on {host} is in use "
+                                 f"({exc.strerror or exc}); give another: --live PORT") from None
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,6 +67,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--controller-name", metavar="NAME", default=None,
                         help="ROS node name of --controller (default fourws_controller; the "
                              "launcher remaps the node to it)")
+    parser.add_argument("--driver", metavar="CMD", default=None,
+                        help="drive from outside instead of the maneuver's driver: 'ackermann' "
+                             "(ackermann_msgs/AckermannDriveStamped on /drive, e.g. an F1TENTH "
+                             "stack), 'joy' (sensor_msgs/Joy on /joy: a gamepad, or fourws node "
+                             "keyboard_driver), or your own driver node (a command, quoted); "
+                             "see docs/driver-contract.md")
     parser.add_argument("--out", type=Path, default=None, metavar="DIR",
                         help="output folder (default: the scenario's recording.output_dir)")
     parser.add_argument("--name", default=None, metavar="RUN",
@@ -55,6 +82,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="replace a run folder of the same name")
     parser.add_argument("--clock", choices=("lockstep", "realtime"), default=None,
                         help="override the scenario's clock mode")
+    parser.add_argument("--live", nargs="?", type=int, const=LIVE_PORT, default=None,
+                        metavar="PORT",
+                        help=f"watch the run live in Foxglove: a Foxglove WebSocket server on "
+                             f"127.0.0.1:PORT (default {LIVE_PORT}) serving the car, its markers "
+                             "and the state while the run goes on")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -62,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     from fourws_ros.domains import domain_for_run  # fourws_ros: not for --help
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
     # rosbags, mcap: not for --help
-    from fourws_run.config import USER_LAW, ControllerSpec, RunConfig
+    from fourws_run.config import INPUT_DRIVERS, USER_LAW, ControllerSpec, RunConfig
     from fourws_run.record import EXIT_CODES, Outcome  # rosbags, mcap: not for --help
     from fourws_run.scenario import load_scenario  # rosbags, mcap: not for --help
     from fourws_run.series import scenario_runs  # rosbags, mcap: not for --help
@@ -96,6 +128,15 @@ def run(args: argparse.Namespace) -> int:
             if laws.count(law) > 1:  # it would run (and be recorded) as often
                 raise ParameterError("--law", f"{law!r} is given {laws.count(law)} times; "
                                      "each law runs once")
+    if args.live is not None:
+        check_port_free(args.live)
+    driver: tuple[str, ...] = ()
+    if args.driver is not None:
+        driver = tuple(shlex.split(args.driver))
+        if not driver:
+            raise ParameterError("--driver", "must be ackermann, joy or a command")
+        if driver[0] not in INPUT_DRIVERS or len(driver) > 1:
+            ControllerSpec(driver).check_runnable("--driver")
     out = args.out if args.out is not None else Path(scenario.recording.output_dir)
     # the environment is input too: a ROS_DOMAIN_ID no run can use (not a domain ID, or held
     # by another fourws run) is exit 2 before any run folder exists (run_graph leases it)
@@ -115,8 +156,11 @@ def run(args: argparse.Namespace) -> int:
                                  "maneuvers of their own")
         for member in members:
             config = RunConfig.from_scenario(scenario, law, controller, maneuver=member)
+            if driver:
+                config = config.replace(driver=driver)
             name = _run_name(args.name, scenario.name, law, member, len(laws) > 1)
-            record = run_graph(config, out, run_name=name, overwrite=args.overwrite)
+            record = run_graph(config, out, run_name=name, overwrite=args.overwrite,
+                               live_port=args.live)
             records.append(record)
             print("\n".join(record.summary_lines()), flush=True)
             if record.interrupted:

@@ -29,7 +29,7 @@ import types
 #: One line for ``fourws --help``.
 HELP = "run one node of the graph in this process: fourws node NAME --ros-args ..."
 
-#: Node name -> module with a ``main(args) -> int``.
+#: Node name -> module with a ``main(args) -> int`` (``module:function`` for another entry).
 NODES: dict[str, str] = {
     "simulator": "fourws_ros.simulator_node",
     "maneuver": "fourws_ros.maneuver_node",
@@ -37,6 +37,10 @@ NODES: dict[str, str] = {
     "recorder": "fourws_ros.recorder_node",
     "replay": "fourws_ros.replay_node",
     "example_controller": "fourws_ros.example_controller",
+    "live_view": "fourws_ros.live_view_node",
+    "ackermann_driver": "fourws_ros.input_driver_node:ackermann_main",
+    "joy_driver": "fourws_ros.input_driver_node:joy_main",
+    "keyboard_driver": "fourws_ros.keyboard_driver_node",
 }
 
 #: Exit code of a node stopped by a signal while starting: a stop asked for, as a node
@@ -62,8 +66,9 @@ def run_node(argv: list[str]) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         if signal.getsignal(sig) is not signal.SIG_IGN:  # an ignored signal stays ignored
             signal.signal(sig, _stopped_while_starting)
-    module = importlib.import_module(NODES[name])
-    return int(module.main([f"fourws_{name}", *rest]) or 0)
+    module_name, _, function = NODES[name].partition(":")
+    module = importlib.import_module(module_name)
+    return int(getattr(module, function or "main")([f"fourws_{name}", *rest]) or 0)
 
 
 def _console_script(name: str) -> int:

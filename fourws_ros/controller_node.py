@@ -269,6 +269,13 @@ class ControllerNode(Node):
     def _on_sim_status(self, msg: Any) -> None:
         if not msg.final or not self.gate.admits_final(float(msg.sim_time_s)):
             return
+        if not self._sim_ended and not self._closing and self.gate.last_step is None:
+            # a peer's announced failure that already arrived comes first (the maneuver
+            # node's docstring of _on_sim_status says why)
+            why = self.peers.check_startup()
+            if why:
+                self._give_up(why)
+                return
         self._sim_ended = True  # the simulator may leave now
         if bool(self.get_parameter("exit_when_done").value):
             self.get_logger().info(f"simulation ended ({msg.end_reason}); stopping")

@@ -58,6 +58,8 @@ NODE_EXIT_S = 40.0
 #: Realtime: simulation time beyond the maneuver's duration after which a run the maneuver
 #: did not end fails, s.
 REALTIME_OVERRUN_S = 2.0
+#: Process name of the live view (``fourws run --live``).
+LIVE_VIEW = "fourws_live_view"
 #: SCHED_FIFO priority of the answer chain (simulator, maneuver, controller), when permitted
 #: (speed only; the verdict never depends on it: a realtime run whose answers come late says
 #: so, as stale commands).
@@ -121,7 +123,8 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
               overwrite: bool = False, echo: Callable[[str], None] | None = None,
               replay_driver_from: Path | None = None,
               node_overrides: dict[str, dict[str, Any]] | None = None,
-              on_running: Callable[[ProcessGroup], None] | None = None) -> RunRecord:
+              on_running: Callable[[ProcessGroup], None] | None = None,
+              live_port: int | None = None) -> RunRecord:
     """Run ``config`` through the real node graph, recording a bag.
 
     Parameters
@@ -145,6 +148,9 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
     on_running : callable, optional
         Called once with the process group when the simulation has started (tests inject
         faults).
+    live_port : int, optional
+        Serve the run over the Foxglove WebSocket protocol on 127.0.0.1 at this port (the
+        live view node beside the run's; its exit never fails the run).
 
     Returns
     -------
@@ -161,9 +167,9 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
     run_dir = prepare_run_dir(Path(out_dir), run_name or
                               f"{config.scenario or 'run'}-{config.law}-{stamp}", overwrite)
     bag_path = run_dir / "bag" if config.recorded_topics else None
-    params = node_params.node_parameters(config, bag_path)
+    params = node_params.node_parameters(config, bag_path, replay_driver_from is not None)
     names = _node_names(config)
-    driver_node = "maneuver"
+    driver_node = config.driver_node  # '' for a user's driver command
     if replay_driver_from is not None:
         driver_node = "replay"
         params[names.maneuver] = {"bag_path": str(replay_driver_from),
@@ -194,6 +200,8 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         ros: LauncherNode | None = None
         try:
             _start_nodes(config, group, params_file, names, driver_node, bag_path is not None)
+            if live_port is not None:
+                _start_live_view(group, live_port)
             echo(f"fourws run {config.scenario or 'run'} / {config.law}: "
                  f"{len(group.children)} nodes on ROS domain {lease.domain_id} "
                  f"({config.clock_mode}), logs in {run_dir / 'logs'}")
@@ -202,7 +210,7 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
             ros = LauncherNode(lease.domain_id, node_params.dumps_config(config.to_dict()),
                                writers, state)
             failure = _drive(config, group, ros, state, interrupt, bag_path is not None, echo,
-                             on_running)
+                             on_running, replay_driver_from is not None)
         except LaunchError as exc:
             failure = str(exc)
         finally:
@@ -254,8 +262,12 @@ def _start_nodes(config: RunConfig, group: ProcessGroup, params_file: Path, name
     else:
         starts.append((names.controller, user_command(config.controller.command)
                        + ros_args(params_file, node_name=names.controller)))
-    starts.append((names.maneuver, node_command(driver_node, params_file,
-                                                node_name=names.maneuver)))
+    if driver_node:
+        starts.append((names.maneuver, node_command(driver_node, params_file,
+                                                    node_name=names.maneuver)))
+    else:  # a user's driver (docs/driver-contract.md) in the maneuver's role
+        starts.append((names.maneuver, user_command(config.driver)
+                       + ros_args(params_file, node_name=names.maneuver)))
     starts.append((names.simulator, node_command("simulator", params_file)))
     for name, cmd in starts:
         try:
@@ -263,6 +275,23 @@ def _start_nodes(config: RunConfig, group: ProcessGroup, params_file: Path, name
         except OSError as exc:
             raise LaunchError(f"cannot start {name} ({' '.join(cmd[:3])}...): "
                               f"{exc.strerror or exc}") from None
+
+
+def _start_live_view(group: ProcessGroup, port: int) -> None:
+    """The live view node (:mod:`fourws_ros.live_view_node`), optional in the group.
+
+    Raises
+    ------
+    LaunchError
+        It cannot be started.
+    """
+    try:
+        group.start(LIVE_VIEW, node_command("live_view", params={"port": int(port)}))
+    except OSError as exc:
+        raise LaunchError(f"cannot start the live view: {exc.strerror or exc}") from None
+    group.optional.add(LIVE_VIEW)
+    group.echo(f"  live view: ws://127.0.0.1:{port} (Foxglove: open connection, Foxglove "
+               "WebSocket)")
 
 
 def _write_record(record: RunRecord, echo: Callable[[str], None]) -> None:
@@ -320,10 +349,10 @@ def _label_user_law(record: RunRecord, config: RunConfig) -> None:
 
 def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: RunState,
            interrupt: _Interrupt, recorded: bool, echo: Callable[[str], None],
-           on_running: Callable[[ProcessGroup], None] | None) -> str:
+           on_running: Callable[[ProcessGroup], None] | None, replay: bool = False) -> str:
     """Wait for the graph, start the simulation, follow it to its final status; '' or the
     failure."""
-    why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded)
+    why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded, replay)
     if why:
         return why
     # the answer chain: in lockstep it sets the pace, in realtime its answers must come
@@ -422,14 +451,17 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             # the simulation ended: the simulator, the maneuver and a built-in controller
             # deliver what they published and exit on their own, and the recorder closes the
             # bag once it holds everything
-            left = group.wait_exit([sim, man], NODE_EXIT_S, poll)
+            # a user's driver, like a user's controller, may never exit by itself
+            left = group.wait_exit([sim, man] if config.driver_node else [sim], NODE_EXIT_S,
+                                   poll)
             if left:
                 echo(f"  {', '.join(left)} did not exit after the run; stopping")
                 group.stop(left)
             # the recorder can only close a complete bag once the maneuver's final counts
             # are in; without them (a stopped or dead maneuver node) it is stopped below and
             # closes the bag with what it has
-            if bag_path is not None and group.has(rec) and state.maneuver_end is not None:
+            if bag_path is not None and group.has(rec) and (
+                    state.maneuver_end is not None or not config.driver_node):
                 left = group.wait_exit([rec], RECORDER_GRACE_S, poll)
                 if left:
                     detail = (state.recorder.detail if state.recorder is not None
@@ -440,13 +472,15 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             # never exit by itself)
             if config.controller.builtin:
                 group.wait_exit([ctrl], 5.0, poll)
-            group.stop([ctrl])
+            group.stop([ctrl] if config.driver_node else [ctrl, man])
         else:
             # stopped early: the nodes publish their final counts and deliver on SIGINT; the
             # recorder drains and closes the bag with what it has
             group.stop([sim, man, ctrl])
         if group.has(rec):
             group.stop([rec], grace_s=RECORDER_GRACE_S)
+        if group.has(LIVE_VIEW):
+            group.stop([LIVE_VIEW])
     except BaseException:
         group.kill_all()
         raise

@@ -10,7 +10,8 @@ launcher use this to take messages only from the run's own nodes.
 
 from __future__ import annotations
 
-from typing import Any
+import time
+from typing import Any, Callable
 
 
 def publisher_gid(info: Any) -> bytes:
@@ -63,6 +64,68 @@ class PublisherNames:
         return self.name(topic, publisher_gid(info))
 
 
+#: A publisher the graph cannot name within this wall time is foreign, s.
+UNIDENTIFIED_AFTER_S = 5.0
+
+
+class RunNodeFilter:
+    """Takes messages only from the run's node of their role (the simulator's realtime
+    answers); a foreign one is refused through ``refuse(topic, detail)``.
+
+    A publisher the graph cannot name yet is held, in order per topic, and decided once it is
+    named (:meth:`poll`): its first messages (a transient-local history handed over on
+    matching) can arrive before discovery has told this node whose they are, and a refused
+    first answer is never sent again (a realtime run then waited 60 s for its first driver
+    input, seen 2 runs in 3 on a loaded machine). Unnamed after :data:`UNIDENTIFIED_AFTER_S`:
+    foreign.
+
+    Parameters
+    ----------
+    names : PublisherNames
+    expected : callable
+        The run's node name for a role parameter name (``"maneuver_node"``).
+    refuse : callable
+        Counts a refusal: ``refuse(topic, detail)``.
+    """
+
+    def __init__(self, names: PublisherNames, expected: Callable[[str], str],
+                 refuse: Callable[[str, str], Any]) -> None:
+        self._names = names
+        self._expected = expected
+        self._refuse = refuse
+        self._held: dict[str, list[tuple[float, bytes, str, bytes, Callable[[bytes], Any]]]] = {}
+
+    def offer(self, topic: str, info: Any, role: str, raw: bytes,
+              handler: Callable[[bytes], Any]) -> None:
+        """A message of ``topic`` received with ``info``: ``handler(raw)`` now if it comes
+        from the run's node of ``role``, later if its publisher is not named yet."""
+        gid = publisher_gid(info)
+        if self._held.get(topic) or self._names.name(topic, gid) is None:
+            self._held.setdefault(topic, []).append((time.monotonic(), gid, role, raw,
+                                                     handler))
+        elif self._decide(topic, gid, role):
+            handler(raw)
+
+    def _decide(self, topic: str, gid: bytes, role: str) -> bool:
+        node = self._names.name(topic, gid)
+        if node == self._expected(role):
+            return True
+        self._refuse(topic, f"publisher {node or '(unknown)'}")
+        return False
+
+    def poll(self) -> None:
+        """Pass on (or refuse) the held messages whose publisher is named now."""
+        for topic, held in self._held.items():
+            while held:
+                since, gid, role, raw, handler = held[0]
+                if (self._names.name(topic, gid) is None
+                        and time.monotonic() - since < UNIDENTIFIED_AFTER_S):
+                    break
+                held.pop(0)
+                if self._decide(topic, gid, role):
+                    handler(raw)
+
+
 def drain(subscription: Any, msg_type: type, raw: bool,
           receive: Any, limit: int = 100_000) -> int:
     """Hand ``receive(msg, info)`` every message waiting in ``subscription``'s queue; the
@@ -81,4 +144,4 @@ def drain(subscription: Any, msg_type: type, raw: bool,
     return n
 
 
-__all__ = ["PublisherNames", "drain", "publisher_gid"]
+__all__ = ["PublisherNames", "RunNodeFilter", "UNIDENTIFIED_AFTER_S", "drain", "publisher_gid"]

@@ -190,7 +190,7 @@ class ManeuverNode(Node):
                          f"{self.maneuver.end_kind}: {reason}" if reason else "completed")
             return
         try:
-            cmd = self.maneuver.command(t, outputs)
+            cmd = self.driver_command(t, outputs)
             raw_cmd = self._driver_encoder.encode(cmd, t)
         except FourwsError as exc:
             self._finish(stamp, t, "aborted", f"aborted: {exc}")
@@ -201,6 +201,11 @@ class ManeuverNode(Node):
         if event or outputs["step"] % STATUS_EVERY_STEPS == 0:
             self._status(stamp, phase, self.maneuver.progress(t), event)
         self._phase = phase
+
+    def driver_command(self, t: float, outputs: dict[str, Any]) -> Any:
+        """The driver input answering the state at ``t``: the maneuver's (the input driver
+        nodes of :mod:`fourws_ros.input_driver_node` take theirs from outside)."""
+        return self.maneuver.command(t, outputs)
 
     def _check_peers(self) -> None:
         """Give up on a graph that does not come together, or whose simulator left."""
@@ -219,7 +224,12 @@ class ManeuverNode(Node):
 
     def _on_sim_status(self, msg: Any) -> None:
         """The simulation ended before the maneuver did (it diverged, or stopped for a node
-        that stopped answering): report the final counts with ``end`` ``stopped``."""
+        that stopped answering): report the final counts with ``end`` ``stopped``. A peer's
+        announced failure that already arrived comes first (the simulator checks its peers
+        ten times as often as this node: its final status, caused by that failure, can
+        overtake this node's own check)."""
+        if msg.final and not self.done:
+            self._check_peers()
         if msg.final and not self.done and self.gate.admits_final(float(msg.sim_time_s)):
             t = float(msg.sim_time_s)
             self._finish(conversions.time_to_ns(t), t, "stopped",

@@ -40,8 +40,10 @@ def dumps_config(config: dict[str, Any]) -> str:
     return json.dumps(config, default=default, sort_keys=True)
 
 
-def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[str, Any]]:
-    """``ros__parameters`` of every node of the run, keyed by ROS node name."""
+def node_parameters(config: RunConfig, bag_path: Path | None,
+                    replay: bool = False) -> dict[str, dict[str, Any]]:
+    """``ros__parameters`` of every node of the run, keyed by ROS node name (``replay``: a
+    replay node answers in the maneuver's place, :func:`expected_endpoints`)."""
     lockstep = config.lockstep
     records = bag_path is not None and bool(config.recorded_topics)
     controller = config.controller.node_name
@@ -53,7 +55,7 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
                "vehicle_json": dumps_config(config.vehicle.to_dict())}
     # every node publishes only once its publishers have matched the run's subscribers
     # (fourws_ros.reporting.MatchWait): the expected count of each topic
-    subscribers = dumps_config(expected_subscribers(config, records))
+    subscribers = dumps_config(expected_subscribers(config, records, replay))
     gate["expected_subscribers_json"] = subscribers
     # the launcher watches the processes and their start-up phases (fourws_ros.graph_run):
     # the nodes' own start-up timeout, for graphs started by hand, is off
@@ -73,6 +75,8 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             "controller_node": controller,
             "maneuver_node": NODE_NAMES[Role.MANEUVER],
             "startup_timeout_s": 0.0,
+            # the course markers (cones, target line) of the scene
+            "maneuver_json": dumps_config(config.maneuver.to_dict()),
         },
         NODE_NAMES[Role.MANEUVER]: {
             "maneuver_json": dumps_config(config.maneuver.to_dict()),
@@ -91,10 +95,16 @@ def node_parameters(config: RunConfig, bag_path: Path | None) -> dict[str, dict[
             **gate,
         },
     }
+    if not config.driver_node:
+        # a user's driver (docs/driver-contract.md) does not report counts or end the run:
+        # the simulator ends it at the maneuver's duration, the recorder counts the driver's
+        # messages by their sequence numbers (as a user controller's)
+        params[NODE_NAMES[Role.SIMULATOR]]["end_time_s"] = float(config.maneuver.duration_s)
     if records:
         params[NODE_NAMES[Role.RECORDER]] = {
             "bag_path": str(bag_path), "topics": list(config.recorded_topics),
-            "controller_node": controller, "startup_timeout_s": 0.0}
+            "controller_node": controller, "startup_timeout_s": 0.0,
+            "maneuver_reports": bool(config.driver_node)}
     return params
 
 
@@ -111,18 +121,21 @@ def write_params_file(path: Path, node_params: dict[str, dict[str, Any]]) -> Pat
     return path
 
 
-def expected_subscribers(config: RunConfig, recorded: bool) -> dict[str, int]:
+def expected_subscribers(config: RunConfig, recorded: bool,
+                         replay: bool = False) -> dict[str, int]:
     """How many of the run's nodes subscribe to each topic (from :func:`expected_endpoints`):
     a publisher of the topic waits for that many matches before it publishes."""
     counts: dict[str, int] = {}
-    for topic, kind, _ in expected_endpoints(config, recorded):
+    for topic, kind, _ in expected_endpoints(config, recorded, replay):
         if kind == "sub":
             counts[topic] = counts.get(topic, 0) + 1
     return counts
 
 
-def expected_endpoints(config: RunConfig, recorded: bool) -> list[tuple[str, str, str]]:
-    """``(topic, "pub"|"sub", node name)`` that must be in the graph before the run starts."""
+def expected_endpoints(config: RunConfig, recorded: bool,
+                       replay: bool = False) -> list[tuple[str, str, str]]:
+    """``(topic, "pub"|"sub", node name)`` that must be in the graph before the run starts
+    (``replay``: the driver inputs come from a replay node, which reads no status)."""
     sim, man = NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER]
     ctrl = config.controller.node_name
     expected = [
@@ -133,6 +146,17 @@ def expected_endpoints(config: RunConfig, recorded: bool) -> list[tuple[str, str
         # contract obliges a user's controller to wait for each tick's driver input too
         (topics.DRIVER_INPUT, "sub", ctrl),
     ]
+    # the status topics are volatile: every node that reads them must have matched before
+    # the first status, or it misses the first ones (counted, a matched count of 1 could be
+    # the simulator's or a viewer's reader, not the recorder's: the live view's load delayed
+    # the recorder by 1.3 s, and 13 of 301 statuses were lost to it)
+    launcher = NODE_NAMES[Role.LAUNCHER]
+    expected += [(topics.MANEUVER_STATUS, "sub", sim), (topics.MANEUVER_STATUS, "sub", launcher),
+                 (topics.SIM_STATUS, "sub", launcher)]
+    if config.driver_node and not replay:  # fourws's maneuver-role nodes read it
+        expected.append((topics.SIM_STATUS, "sub", man))
+    if config.controller.builtin:
+        expected.append((topics.SIM_STATUS, "sub", ctrl))
     if recorded:
         rec = NODE_NAMES[Role.RECORDER]
         expected += [(t, "sub", rec) for t in config.recorded_topics]

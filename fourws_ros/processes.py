@@ -211,6 +211,9 @@ class ProcessGroup:
         bin_dir = str(Path(sys.executable).parent)
         self.env["PATH"] = bin_dir + os.pathsep + self.env.get("PATH", "")
         self.children: list[Child] = []
+        #: Children whose exit does not fail the run (the live view: a viewer, not a node of
+        #: the run).
+        self.optional: set[str] = set()
         self.grace_s = grace_s
         self.echo = echo
         self.started_at = time.monotonic()
@@ -283,7 +286,7 @@ class ProcessGroup:
         at the end of a run)."""
         for child in self.children:
             code = child.exit_code()
-            if code not in (None, 0):
+            if code not in (None, 0) and child.name not in self.optional:
                 return child
         return None
 

@@ -57,7 +57,7 @@ from rclpy.serialization import deserialize_message
 from fourws_ros import peers, topics
 from fourws_ros.identity import PublisherNames, drain, publisher_gid
 from fourws_ros.runtime import EXIT_INCOMPLETE, EXIT_PEERS, SPIN_TIMEOUT_S, run_node
-from fourws_run.accounting import Ledger
+from fourws_run.accounting import REPORTING_ROLES, Ledger
 from fourws_run.bagfile import BagError, BagWriter
 from fourws_run.cdr import stamp_ns
 from fourws_sim.errors import ParameterError
@@ -125,6 +125,9 @@ class RecorderNode(Node):
         self.declare_parameter("close_when_complete", True, ParameterDescriptor(
             description="close the bag and exit once the run ended and every message is "
                         "stored"))
+        self.declare_parameter("maneuver_reports", True, ParameterDescriptor(
+            description="the maneuver role's node reports its counts in ManeuverStatus (false: "
+                        "a user's driver, counted by sequence numbers)", **ro))
         self.declare_parameter("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
             description="wall time to wait for the simulator's states before giving up (the "
                         "bag is closed empty, naming what is missing), s (0: wait forever)",
@@ -148,7 +151,10 @@ class RecorderNode(Node):
         except BagError as exc:
             raise ParameterError("bag_path", str(exc)) from None
         self.recorded = wanted
-        self.ledger = Ledger(wanted, writers)
+        reporting = dict(REPORTING_ROLES)
+        if not bool(self.get_parameter("maneuver_reports").value):
+            reporting.pop(topics.Role.MANEUVER)
+        self.ledger = Ledger(wanted, writers, reporting)
         self.closed = False
         self._gave_up = ""
         self._failed = False

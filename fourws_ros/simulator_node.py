@@ -42,6 +42,7 @@ starts paused (the launcher un-pauses it once the graph is complete).
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import sys
 import time
@@ -51,8 +52,10 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
-from fourws_ros import conversions, peers, reporting, simulator_params, topics
-from fourws_ros.identity import PublisherNames
+from fourws_ros import conversions, peers, reporting, topics
+from fourws_ros.identity import PublisherNames, RunNodeFilter
+from fourws_ros.scene_publisher import ScenePublisher
+from fourws_ros.simulator_params import declare_parameters
 from fourws_ros.runtime import EXIT_PEERS, report_phase, run_node
 from fourws_run import codecs
 from fourws_run.clock_modes import (CLOCK_MODES, DRIVER_INPUT, LockstepClock, RealtimeClock,
@@ -60,6 +63,7 @@ from fourws_run.clock_modes import (CLOCK_MODES, DRIVER_INPUT, LockstepClock, Re
 from fourws_run.ticks import FlowWindow, InputLimits, Tick, TickEngine, whole_multiple
 from fourws_sim.drivers import DriverCommand
 from fourws_sim.errors import ParameterError, UnknownNameError
+from fourws_sim.maneuvers import make_maneuver
 from fourws_sim.params import Tire
 from fourws_sim.simulator import Simulator
 
@@ -71,7 +75,8 @@ FINAL_WAIT_S = 10.0
 #: Topics whose counts the simulator knows for flow control: its own recorded publications
 #: and the answers it accepted.
 FLOW_TOPICS = (topics.STATE, topics.ODOM, topics.IMU, topics.SIM_STATUS, topics.DRIVER_INPUT,
-               topics.REAR_STEER_CMD)
+               topics.REAR_STEER_CMD, topics.TF, topics.MARKERS, topics.TF_STATIC,
+               topics.ROBOT_DESCRIPTION)
 
 
 class SimulatorNode(Node):
@@ -83,7 +88,7 @@ class SimulatorNode(Node):
 
     def __init__(self) -> None:
         super().__init__("fourws_simulator")
-        simulator_params.declare(self)
+        declare_parameters(self)
         self._cfg: dict[str, Any] = {name: self._param(name) for name in self._LIVE}
         self.add_on_set_parameters_callback(self._on_set)
         self.finished = False  # run_node: stop spinning
@@ -164,7 +169,10 @@ class SimulatorNode(Node):
                                  self._on_recorder_status, topics.STATUS_QOS)
         self._recorder = reporting.RecorderWatch(self, subscribe=False)
         self._recorder_seen = int(self._param("recorder_window")) == 0
-        self._names = PublisherNames(self)
+        self._run_nodes = RunNodeFilter(
+            PublisherNames(self), lambda role_param: str(self._param(role_param)),
+            lambda topic, detail: self.clock.rejections.add(topic, "not from the run's node",
+                                                            detail))
         self.peers = peers.PeerWatch(self, float(self._param("startup_timeout_s")))
         state_subscribers = self.matched.expected.get(
             topics.STATE, int(self._param("expected_state_subscribers")))
@@ -178,6 +186,11 @@ class SimulatorNode(Node):
         self._state_encoder = codecs.StateEncoder(self.model_name, topics.FRAME_BODY)
         self._odom_encoder = codecs.OdometryEncoder(topics.FRAME_ODOM, topics.FRAME_BODY)
         self._imu_encoder = codecs.ImuEncoder(topics.FRAME_BODY)
+        self._end_s = float(self._param("end_time_s"))
+        self.scene: ScenePublisher | None = None
+        if bool(self._param("publish_scene")):
+            self.scene = ScenePublisher(self, self.counts, self.vehicle, self._maneuver(),
+                                        float(self._param("path_period_s")))
         self.create_service(Trigger, topics.SRV_RESET, self._on_reset)
         self.create_service(SetBool, topics.SRV_PAUSE, self._on_pause)
         config = {
@@ -226,7 +239,8 @@ class SimulatorNode(Node):
     # ------------------------------------------------------------------ the sink of the clock
     def publish_tick(self, tick: Tick) -> bool:
         """Publish ``tick``: state (first: the answers' critical path starts there), clock,
-        then odometry/IMU/status when due."""
+        then the scene's transforms, odometry/IMU/markers and status when due; at
+        ``end_time_s`` end the run after this state."""
         try:
             raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
         except conversions.NonFiniteError as exc:
@@ -235,14 +249,30 @@ class SimulatorNode(Node):
         self.state_pub.publish(raw)
         self.clock_pub.publish(codecs.encode_clock(tick.t))
         t = tick.t
-        if t >= self._next_viz_s - 1e-12:
+        viz_due = t >= self._next_viz_s - 1e-12
+        if self.scene is not None:
+            self.scene.publish(tick, viz_due)
+        if viz_due:
             self.odom_pub.publish(self._odom_encoder.encode(tick.outputs, tick.stamp_ns))
             self.imu_pub.publish(self._imu_encoder.encode(tick.outputs, tick.stamp_ns))
             self._next_viz_s = t + self._cfg["viz_period_s"]
         if t >= self._next_status_s - 1e-12:
             self._publish_status(t)
             self._next_status_s = t + self._cfg["status_period_s"]
+        if self._end_s > 0.0 and t >= self._end_s - 1e-12:
+            self.end(f"end time {self._end_s:g} s reached", False)
+            return False
         return True
+
+    def _maneuver(self) -> Any:
+        """The run's maneuver (``maneuver_json``), for the scene's course; None without."""
+        text = str(self._param("maneuver_json"))
+        if not text:
+            return None
+        try:
+            return make_maneuver(json.loads(text), self.vehicle)
+        except json.JSONDecodeError as exc:
+            raise ParameterError("maneuver_json", f"not JSON ({exc})") from None
 
     def report_wait(self, t: float) -> None:
         """A tick has waited a second: a status says for what."""
@@ -275,16 +305,6 @@ class SimulatorNode(Node):
         return sent
 
     # ------------------------------------------------------------------ inputs
-    def _from(self, topic: str, info: Any, role_param: str) -> bool:
-        """Realtime: whether a message comes from the run's node ``role_param`` names (a
-        foreign one is refused and counted)."""
-        node = self._names.of(topic, info)
-        if node == self._param(role_param):
-            return True
-        self.clock.rejections.add(topic, "not from the run's node",
-                                  f"publisher {node or '(unknown)'}")
-        return False
-
     def _on_driver(self, raw: bytes) -> None:
         try:
             stamp, cmd = codecs.parse_driver_input(raw)
@@ -294,8 +314,7 @@ class SimulatorNode(Node):
         self.clock.offer_driver(stamp, cmd)
 
     def _on_driver_from(self, raw: bytes, info: Any) -> None:
-        if self._from(topics.DRIVER_INPUT, info, "maneuver_node"):
-            self._on_driver(raw)
+        self._run_nodes.offer(topics.DRIVER_INPUT, info, "maneuver_node", raw, self._on_driver)
 
     def _on_cmd(self, raw: bytes) -> None:
         try:
@@ -306,8 +325,8 @@ class SimulatorNode(Node):
         self.clock.offer_command(msg["state_step"], msg["state_stamp_ns"], msg["angle_rad"])
 
     def _on_cmd_from(self, raw: bytes, info: Any) -> None:
-        if self._from(topics.REAR_STEER_CMD, info, "controller_node"):
-            self._on_cmd(raw)
+        self._run_nodes.offer(topics.REAR_STEER_CMD, info, "controller_node", raw,
+                              self._on_cmd)
 
     def _on_maneuver_status(self, msg: Any) -> None:
         if not msg.done or self.ended:
@@ -337,6 +356,8 @@ class SimulatorNode(Node):
             response.message = "pause the realtime simulation before a reset"
             return response
         self.clock = self._make_clock()
+        if self.scene is not None:
+            self.scene.restart()
         self.ended = ""
         self.stop_reason = ""
         self._final_sent = False
@@ -361,6 +382,7 @@ class SimulatorNode(Node):
         if self.ended:
             self._try_final()
             return
+        self._run_nodes.poll()
         clock = self.clock
         if not clock.started:
             why = self.peers.check_startup()

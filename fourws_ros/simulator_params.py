@@ -1,7 +1,7 @@
 # SPDX-FileCopyrightText: 2026 fourws developers
 # SPDX-License-Identifier: Apache-2.0
-"""The simulator node's ROS parameters: each with its default, range and description (units),
-declared in one place (``ros2 param describe`` shows these texts)."""
+"""The ROS parameters of the simulator node (:mod:`fourws_ros.simulator_node`), declared with
+their descriptors: units, ranges, what is read-only."""
 
 from __future__ import annotations
 
@@ -23,8 +23,8 @@ def _irange(lo: int, hi: int) -> list[IntegerRange]:
     return [IntegerRange(from_value=lo, to_value=hi, step=1)]
 
 
-def declare(node: Any) -> None:
-    """Declare every parameter of the simulator node on ``node``."""
+def declare_parameters(node: Any) -> None:
+    """Declare every simulator parameter on ``node``."""
     ro = dict(read_only=True)
     declare = node.declare_parameter
     declare("vehicle", "table_8_1", ParameterDescriptor(
@@ -100,6 +100,19 @@ def declare(node: Any) -> None:
                     "ahead of what the recorder reports stored (0 = no recorder flow "
                     "control; must stay below the stream history depth)",
         integer_range=_irange(0, topics.STREAM_DEPTH // 2), read_only=True))
+    declare("maneuver_json", "", ParameterDescriptor(
+        description="the run's maneuver mapping as JSON, for the course markers (its cones "
+                    "and target line; '' = none)", **ro))
+    declare("publish_scene", True, ParameterDescriptor(
+        description="publish the car in 3D: /tf, /tf_static, /robot_description, "
+                    "/fourws/markers", **ro))
+    declare("path_period_s", 0.1, ParameterDescriptor(
+        description="driven-path and course markers publish period (simulation time), s",
+        floating_point_range=_frange(1e-3, 10.0), **ro))
+    declare("end_time_s", 0.0, ParameterDescriptor(
+        description="end the run at the first state at or after this simulation time (an "
+                    "external driver that does not end it itself; 0 = the maneuver node "
+                    "ends it), s", floating_point_range=_frange(0.0, 1e5), **ro))
 
 
-__all__ = ["MAX_STEP_S", "MIN_STEP_S", "declare"]
+__all__ = ["MAX_STEP_S", "MIN_STEP_S", "declare_parameters"]

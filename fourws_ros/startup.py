@@ -59,13 +59,15 @@ def _late_node(group: ProcessGroup, reporting: set[str], now: float) -> str:
 
 
 def wait_for_graph(config: RunConfig, group: ProcessGroup, ros: Any,
-                   interrupted: Callable[[], bool], recorded: bool) -> str:
+                   interrupted: Callable[[], bool], recorded: bool, replay: bool = False) -> str:
     """Wait until the graph of ``config`` is complete and the simulator's pause service is
     there; '' or why not (module docstring)."""
-    expected = node_params.expected_endpoints(config, recorded)
+    expected = node_params.expected_endpoints(config, recorded, replay)
     if recorded:
         expected.append((topics.RUN_CONFIG, "sub", topics.NODE_NAMES[topics.Role.RECORDER]))
     user = set() if config.controller.builtin else {config.controller.node_name}
+    if not config.driver_node:  # a user's driver in the maneuver's role reports no phases
+        user.add(topics.NODE_NAMES[topics.Role.MANEUVER])
     reporting = {c.name for c in group.children} - user
     ready_at = 0.0
     while True:
@@ -88,9 +90,12 @@ def wait_for_graph(config: RunConfig, group: ProcessGroup, ros: Any,
             return ""
         user_missing = [e for e in missing if e[2] in user]
         if user_missing and now - group.started_at > USER_NODE_TIMEOUT_S:
-            return (f"the controller {config.controller.node_name} "
-                    f"({' '.join(config.controller.command)}) is not in the graph after "
-                    f"{USER_NODE_TIMEOUT_S:.0f} s; missing: " + _endpoints(user_missing))
+            node = user_missing[0][2]
+            who = (f"the controller {node} ({' '.join(config.controller.command)})"
+                   if node == config.controller.node_name and not config.controller.builtin
+                   else f"the driver {node} ({' '.join(config.driver)})")
+            return (f"{who} is not in the graph after {USER_NODE_TIMEOUT_S:.0f} s; missing: "
+                    + _endpoints(user_missing))
         if now - ready_at > DISCOVERY_TIMEOUT_S and (missing != user_missing or not missing):
             if not missing:
                 return "the simulator's /fourws/pause service did not appear"

@@ -31,8 +31,16 @@ QoS choice (why):
   current time, not replay the past.
 * ``STATUS_QOS`` (simulator, maneuver and recorder status): reliable, keep last
   :data:`STATUS_DEPTH` -- the events (``done``, final counts) must arrive.
-* ``LATCHED_QOS`` (run and node configuration): reliable, transient local, depth 1 per
-  publisher -- a recorder that joins late still gets them.
+* ``LATCHED_QOS`` (run and node configuration, ``/tf_static``, ``/robot_description``):
+  reliable, transient local, depth 1 per publisher -- a recorder, RViz or Foxglove that joins
+  late still gets them (what tf2's static listener and robot_state_publisher use).
+* ``/tf`` and ``/fourws/markers`` are streams of the simulator like the state (``STREAM_QOS``):
+  the recorder must not miss the first transforms either. tf2's listeners and RViz subscribe
+  reliable and volatile, which a transient-local writer serves too.
+* ``DRIVE_QOS`` (``/drive``, ``/joy``: inputs from another stack or a gamepad, read by the
+  fourws driver nodes): reliable, volatile, keep last 10 -- what an F1TENTH stack, the
+  ``joy`` node and ``ros2 topic pub`` publish with (a reliable reader does not match a
+  best-effort writer: a driver that publishes best effort is told so by its own graph tools).
 """
 
 from __future__ import annotations
@@ -41,11 +49,12 @@ import importlib
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from fourws_run.interface import (CLOCK, DRIVER_INPUT, FRAME_BODY, FRAME_ODOM, IMU,
-                                  LATCHED_TOPICS, MANEUVER_STATUS, NAMESPACE, NODE_CONFIG,
-                                  NODE_NAMES, ODOM, REAR_STEER_CMD, RECORDED_TOPICS,
-                                  RECORDER_STATUS, RUN_CONFIG, SIM_STATUS, SRV_PAUSE,
-                                  SRV_RESET, STATE, TOPIC_TYPES, Role)
+from fourws_run.interface import (CLOCK, DRIVE, DRIVER_INPUT, EXTERNAL_TOPIC_TYPES, FRAME_BODY,
+                                  FRAME_ODOM, IMU, JOY, LATCHED_TOPICS, MANEUVER_STATUS,
+                                  MARKERS, NAMESPACE, NODE_CONFIG, NODE_NAMES, ODOM,
+                                  REAR_STEER_CMD, RECORDED_TOPICS, RECORDER_STATUS,
+                                  ROBOT_DESCRIPTION, RUN_CONFIG, SIM_STATUS, SRV_PAUSE,
+                                  SRV_RESET, STATE, TF, TF_STATIC, TOPIC_TYPES, Role)
 
 #: History depth of the message streams (messages): 2 s of a 1 kHz stream.
 STREAM_DEPTH = 2000
@@ -62,6 +71,9 @@ LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
 CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STREAM_DEPTH,
+                       reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE)
+DRIVE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                        reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)
 #: What a recorder subscribes latched topics with: transient local like the publishers, but a
@@ -84,8 +96,14 @@ TOPIC_QOS: dict[str, QoSProfile] = {
     NODE_CONFIG: LATCHED_QOS,
     CLOCK: CLOCK_QOS,
     RECORDER_STATUS: STATUS_QOS,
+    TF: STREAM_QOS,
+    TF_STATIC: LATCHED_QOS,
+    ROBOT_DESCRIPTION: LATCHED_QOS,
+    MARKERS: STREAM_QOS,
+    DRIVE: DRIVE_QOS,
+    JOY: DRIVE_QOS,
 }
-assert set(TOPIC_QOS) == set(TOPIC_TYPES)
+assert set(TOPIC_QOS) == set(TOPIC_TYPES) | set(EXTERNAL_TOPIC_TYPES)
 assert all(TOPIC_QOS[t] is LATCHED_QOS for t in LATCHED_TOPICS)
 
 
@@ -103,13 +121,14 @@ def message_class(topic: str) -> type:
     KeyError
         If ``topic`` is not a graph topic.
     """
-    package, _, name = TOPIC_TYPES[topic].split("/")
+    package, _, name = {**TOPIC_TYPES, **EXTERNAL_TOPIC_TYPES}[topic].split("/")
     return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
-__all__ = ["CLOCK", "CLOCK_QOS", "DRIVER_INPUT", "FRAME_BODY", "FRAME_ODOM", "IMU",
-           "LATCHED_QOS", "LATCHED_RECORD_QOS", "MANEUVER_STATUS", "NAMESPACE", "NODE_CONFIG",
-           "NODE_NAMES", "ODOM",
-           "REAR_STEER_CMD", "RECORDED_TOPICS", "RECORDER_STATUS", "RUN_CONFIG", "Role",
+__all__ = ["CLOCK", "CLOCK_QOS", "DRIVE", "DRIVER_INPUT", "DRIVE_QOS", "FRAME_BODY",
+           "FRAME_ODOM", "IMU", "JOY", "LATCHED_QOS", "LATCHED_RECORD_QOS", "MANEUVER_STATUS",
+           "MARKERS", "NAMESPACE", "NODE_CONFIG", "NODE_NAMES", "ODOM", "REAR_STEER_CMD",
+           "RECORDED_TOPICS", "RECORDER_STATUS", "ROBOT_DESCRIPTION", "RUN_CONFIG", "Role",
            "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATUS_DEPTH", "STATUS_QOS",
-           "STREAM_DEPTH", "STREAM_QOS", "TOPIC_QOS", "TOPIC_TYPES", "message_class"]
+           "STREAM_DEPTH", "STREAM_QOS", "TF", "TF_STATIC", "TOPIC_QOS", "TOPIC_TYPES",
+           "message_class"]

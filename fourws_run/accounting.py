@@ -177,11 +177,18 @@ class Ledger:
     writers : mapping of Role to str
         The ROS node name of each role in this run (who may publish what:
         :data:`fourws_run.interface.WRITER_ROLES`).
+    reporting : mapping of Role to tuple of str
+        The roles whose final status carries their counts (default :data:`REPORTING_ROLES`;
+        a user's driver in the maneuver's role reports none: its messages are counted by
+        their sequence numbers).
     """
 
-    def __init__(self, topics: Iterable[str], writers: Mapping[interface.Role, str]) -> None:
+    def __init__(self, topics: Iterable[str], writers: Mapping[interface.Role, str],
+                 reporting: Mapping[interface.Role, tuple[str, ...]] = REPORTING_ROLES
+                 ) -> None:
         self.topics = list(topics)
         self.writers = dict(writers)
+        self.reporting = dict(reporting)
         self._legit: dict[str, set[str]] = {
             t: {self.writers[r] for r in interface.WRITER_ROLES[t] if r in self.writers}
             for t in self.topics}
@@ -229,7 +236,7 @@ class Ledger:
         return sim is not None and sim in self._final
 
     def _reporters(self, topic: str) -> list[str]:
-        return [self.writers[role] for role, counted in REPORTING_ROLES.items()
+        return [self.writers[role] for role, counted in self.reporting.items()
                 if topic in counted and role in self.writers
                 and role in interface.WRITER_ROLES[topic]]
 

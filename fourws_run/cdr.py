@@ -12,8 +12,11 @@ Wire format (plain CDR, XCDR1, what rmw_fastrtps and rmw_cyclonedds send for the
 depth first in definition order, each primitive aligned to its own size (at most 8) relative to
 the end of the header; a fixed array ``T[n]`` is ``n`` such values; a string is a ``uint32``
 byte count including the terminating NUL, then the bytes and the NUL. Strings are the only
-variable-size part of the messages handled here: once their lengths are known every offset is,
-and for a sequence (``T[]``) there is no fixed layout (:class:`CodecError`).
+variable-size part of the messages decoded here: once their lengths are known every offset is.
+A sequence (``T[]``: a ``uint32`` element count, then the elements) has a layout only once its
+count is given too, as encoders give it (:func:`layout` with ``sequences``: a TFMessage of
+nine transforms, a MarkerArray of fixed markers); the decoders refuse sequences
+(:class:`CodecError`).
 
 * :func:`layout` -- the layout of a message whose strings are given (an encoder's frame id,
   model or law name), with :meth:`Layout.template` (the serialized bytes with every string
@@ -55,6 +58,8 @@ PRIMITIVES: dict[str, str] = {
     "float32": "f", "float64": "d",
 }
 _SIZES = {name: struct.calcsize("<" + code) for name, code in PRIMITIVES.items()}
+#: :attr:`Slot.type` of a sequence's length field (:func:`layout` with ``sequences``).
+SEQUENCE = "sequence"
 _STRING_LENGTH = struct.Struct("<I")
 _STRING_LENGTH_BE = struct.Struct(">I")
 #: Bytes a message may have after its last field (padding to a multiple of 4, which the CDR
@@ -79,14 +84,17 @@ class Slot:
         Dotted path of the field (``"header.stamp.sec"``, ``"pose.covariance"``); elements of
         an array of messages or strings are indexed (``"points[2].x"``).
     type : str
-        Primitive ROS type (``"float64"``, ``"uint32"``, ...) or ``"string"``.
+        Primitive ROS type (``"float64"``, ``"uint32"``, ...), ``"string"``, or
+        :data:`SEQUENCE` (the ``uint32`` length of a sequence, whose elements follow as
+        their own slots: ``"points[0].x"``, a sequence of numbers as one ``"data[]"`` array).
     offset : int
         Byte offset in the serialized message, the encapsulation header included (for a
-        string: of its ``uint32`` length).
+        string or a sequence: of its ``uint32`` length).
     count : int
         Elements of a fixed array; 0 for a single value.
     length : int
-        Strings: bytes after the length field (the text and its NUL); 0 otherwise.
+        Strings: bytes after the length field (the text and its NUL); sequences: the element
+        count; 0 otherwise.
     """
 
     name: str
@@ -100,6 +108,8 @@ class Slot:
         """Bytes taken (without the alignment padding before it)."""
         if self.type == "string":
             return 4 + self.length
+        if self.type == SEQUENCE:
+            return 4
         return _SIZES[self.type] * max(self.count, 1)
 
     @property
@@ -112,6 +122,8 @@ class Slot:
         """``struct`` format of the field's values (a string: its text without the NUL)."""
         if self.type == "string":
             return f"4x{max(self.length - 1, 0)}s" + ("x" if self.length else "")
+        if self.type == SEQUENCE:
+            return "4x"
         return f"{self.count}{PRIMITIVES[self.type]}" if self.count else PRIMITIVES[self.type]
 
 
@@ -133,11 +145,14 @@ def _align(pos: int, size: int) -> int:
 
 def _walk(store: Any, msgtype: str, pos: int, prefix: str,
           string_length: Callable[[str, int], int], slots: list[Slot],
-          times: list[str]) -> int:
+          times: list[str],
+          sequence_length: Callable[[str, int], int] | None = None) -> int:
     """Append the slots of ``msgtype`` serialized from ``pos``; return the end position.
 
     ``string_length(name, offset)`` gives the byte count of a string (with its NUL) whose
-    length field is at ``offset``; ``times`` collects the paths of ``builtin_interfaces/Time``
+    length field is at ``offset``; ``sequence_length(name, offset)`` the element count of a
+    sequence whose length field is at ``offset`` (without it a sequence has no layout:
+    :class:`_SequenceError`); ``times`` collects the paths of ``builtin_interfaces/Time``
     fields in order.
     """
     try:
@@ -149,7 +164,8 @@ def _walk(store: Any, msgtype: str, pos: int, prefix: str,
         if kind == Nodetype.NAME:
             if detail == TIME_TYPE:
                 times.append(full)
-            pos = _walk(store, detail, pos, f"{full}.", string_length, slots, times)
+            pos = _walk(store, detail, pos, f"{full}.", string_length, slots, times,
+                        sequence_length)
         elif kind == Nodetype.BASE:
             pos = _primitive(full, detail[0], 0, pos, string_length, slots)
         elif kind == Nodetype.ARRAY:
@@ -159,15 +175,42 @@ def _walk(store: Any, msgtype: str, pos: int, prefix: str,
                     if sub_detail == TIME_TYPE:
                         times.append(f"{full}[{i}]")
                     pos = _walk(store, sub_detail, pos, f"{full}[{i}].", string_length, slots,
-                                times)
+                                times, sequence_length)
             elif sub_detail[0] == "string":
                 for i in range(count):
                     pos = _primitive(f"{full}[{i}]", "string", 0, pos, string_length, slots)
             else:
                 pos = _primitive(full, sub_detail[0], int(count), pos, string_length, slots)
+        elif kind == Nodetype.SEQUENCE and sequence_length is not None:
+            pos = _sequence(store, full, detail[0], pos, string_length, slots, times,
+                            sequence_length)
         else:
             raise _SequenceError(f"{msgtype} field {name!r} is a sequence: the message has no "
                                  "fixed layout")
+    return pos
+
+
+def _sequence(store: Any, full: str, element: tuple[Any, Any], pos: int,
+              string_length: Callable[[str, int], int], slots: list[Slot], times: list[str],
+              sequence_length: Callable[[str, int], int]) -> int:
+    """The slots of sequence ``full`` (its ``uint32`` length, then its elements as a fixed
+    array of the length ``sequence_length`` gives); returns the end position."""
+    pos = _align(pos, 4)
+    n = int(sequence_length(full, pos))
+    slots.append(Slot(full, SEQUENCE, pos, 0, n))
+    pos += 4
+    sub_kind, sub_detail = element
+    if sub_kind == Nodetype.NAME:
+        for i in range(n):
+            if sub_detail == TIME_TYPE:
+                times.append(f"{full}[{i}]")
+            pos = _walk(store, sub_detail, pos, f"{full}[{i}].", string_length, slots, times,
+                        sequence_length)
+    elif sub_detail[0] == "string":
+        for i in range(n):
+            pos = _primitive(f"{full}[{i}]", "string", 0, pos, string_length, slots)
+    elif n:
+        pos = _primitive(full + "[]", sub_detail[0], n, pos, string_length, slots)
     return pos
 
 
@@ -235,6 +278,9 @@ class Layout:
         buf = bytearray(self.size)
         buf[:ENCAPSULATION_BYTES] = LITTLE_ENDIAN_HEADER
         for s in self.slots:
+            if s.type == SEQUENCE:
+                _STRING_LENGTH.pack_into(buf, s.offset, s.length)
+                continue
             if s.type != "string":
                 continue
             if s.name not in self.strings:
@@ -276,7 +322,7 @@ class Layout:
         first = value = 0
         for name in names:
             i = index.get(name)
-            if i is None or self.slots[i].type == "string":
+            if i is None or self.slots[i].type in ("string", SEQUENCE):
                 raise CodecError(f"{self.msgtype} has no numeric field {name!r}")
             if i <= prev_index:
                 raise CodecError(f"{self.msgtype}: fields {list(names)} are not in wire order")
@@ -295,43 +341,85 @@ class Layout:
 
 
 def layout(msgtype: str, strings: Mapping[str, str] | None = None,
-           store: Any = None) -> Layout:
-    """The layout of ``msgtype`` with the given text in its string fields.
+           store: Any = None, *, sequences: Mapping[str, int] | None = None,
+           blank_strings: bool = False) -> Layout:
+    """The layout of ``msgtype`` with the given text in its string fields and the given
+    element counts in its sequences (an encoder's frame ids, a fixed number of transforms or
+    markers).
 
     Parameters
     ----------
     msgtype : str
         ``package/msg/Name`` of a type of ``store``.
     strings : mapping of str to str
-        Text of every string field by path (``{"header.frame_id": "base_link"}``).
+        Text of string fields by path (``{"header.frame_id": "base_link"}``,
+        ``{"transforms[1].child_frame_id": "FL_steer"}``).
     store : rosbags Typestore, optional
         Default :func:`fourws_run.bagfile.typestore`.
+    sequences : mapping of str to int, optional
+        Element count of sequence fields by path (``{"transforms": 9}``,
+        ``{"markers[0].points": 2}``); a sequence not named is empty. Without it a message
+        with a sequence has no layout.
+    blank_strings : bool
+        String fields not in ``strings`` are empty (else each must be given).
 
     Raises
     ------
     CodecError
-        Unknown type, a sequence field (no fixed layout), a string field without text, or a
-        text given for a field that is not a string of the message.
+        Unknown type, a sequence field without ``sequences``, a string field without text
+        (unless ``blank_strings``), or a text or count given for a field that is not a string
+        or a sequence of the message.
     """
     given = {name: text.encode("utf-8") for name, text in (strings or {}).items()}
+    counts = dict(sequences or {})
     missing: list[str] = []
 
     def length(name: str, offset: int) -> int:
         del offset
         if name not in given:
+            if blank_strings:
+                given[name] = b""
+                return 1
             missing.append(name)
             return 1
         return len(given[name]) + 1
 
+    def count(name: str, offset: int) -> int:
+        del offset
+        n = counts.get(name, 0)
+        if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+            raise CodecError(f"{msgtype}: sequence {name!r} needs a count >= 0, got {n!r}")
+        return n
+
     slots: list[Slot] = []
     times: list[str] = []
-    size = _walk(_store(store), msgtype, ENCAPSULATION_BYTES, "", length, slots, times)
+    size = _walk(_store(store), msgtype, ENCAPSULATION_BYTES, "", length, slots, times,
+                 count if sequences is not None else None)
     if missing:
         raise CodecError(f"{msgtype}: give the text of its string fields {missing}")
     unknown = sorted(set(given) - {s.name for s in slots if s.type == "string"})
     if unknown:
         raise CodecError(f"{msgtype} has no string fields {unknown}")
+    unknown = sorted(set(counts) - {s.name for s in slots if s.type == SEQUENCE})
+    if unknown:
+        raise CodecError(f"{msgtype} has no sequence fields {unknown}")
     return Layout(msgtype, tuple(slots), size, given)
+
+
+def constants(msgtype: str, store: Any = None) -> dict[str, Any]:
+    """The constants a message definition declares (``visualization_msgs/Marker``'s ``ARROW``,
+    ``ADD``, ...), by name.
+
+    Raises
+    ------
+    CodecError
+        Unknown type.
+    """
+    try:
+        consts, _ = _store(store).fielddefs[msgtype]
+    except KeyError:
+        raise CodecError(f"unknown message type {msgtype!r}") from None
+    return {name: value for name, _type, value in consts}
 
 
 def _read_length(data: bytes | memoryview, offset: int, little: bool) -> int:
@@ -626,17 +714,36 @@ _STAMP_BE = struct.Struct(">iI")
 def stamp_offset(msgtype: str, store: Any = None) -> int | None:
     """Byte offset of the message's stamp: its first ``builtin_interfaces/Time`` field
     (``header.stamp``, ``Clock.clock``) if no string or sequence precedes it (then it is the
-    same in every message of the type); ``None`` otherwise."""
+    same in every message of the type), or the first element's when the message starts with a
+    sequence of messages that start with it (``tf2_msgs/TFMessage``,
+    ``visualization_msgs/MarkerArray``: the stamp of their first transform or marker; such a
+    message with an empty sequence has none); ``None`` otherwise."""
+    location = _stamp_location(msgtype, store)
+    return None if location is None else location[0]
+
+
+def _stamp_location(msgtype: str, store: Any = None) -> tuple[int, int | None] | None:
+    """(offset of the stamp, offset of the leading sequence's length or None) -- see
+    :func:`stamp_offset`."""
     if store is None:
-        return _default_stamp_offset(msgtype)
+        return _default_stamp_location(msgtype)
 
     def length(name: str, offset: int) -> int:
         raise _Stop(offset)
 
+    leading: list[int] = []
+
+    def first_element(name: str, offset: int) -> int:
+        # the first sequence, before any other field: its first element's stamp
+        if slots or leading:
+            raise _Stop(offset)
+        leading.append(offset)
+        return 1
+
     slots: list[Slot] = []
     times: list[str] = []
     try:
-        _walk(store, msgtype, ENCAPSULATION_BYTES, "", length, slots, times)
+        _walk(store, msgtype, ENCAPSULATION_BYTES, "", length, slots, times, first_element)
     except (_Stop, _SequenceError):
         pass  # every slot found before the first variable-size field has a fixed offset
     except CodecError:
@@ -644,12 +751,12 @@ def stamp_offset(msgtype: str, store: Any = None) -> int | None:
     fixed = {s.name: s.offset for s in slots}
     if not times or f"{times[0]}.nanosec" not in fixed:
         return None
-    return fixed[f"{times[0]}.sec"]
+    return fixed[f"{times[0]}.sec"], (leading[0] if leading else None)
 
 
 @lru_cache(maxsize=None)
-def _default_stamp_offset(msgtype: str) -> int | None:
-    return stamp_offset(msgtype, _store(None))
+def _default_stamp_location(msgtype: str) -> tuple[int, int | None] | None:
+    return _stamp_location(msgtype, _store(None))
 
 
 def stamp_ns(data: bytes | memoryview, msgtype: str, store: Any = None) -> int | None:
@@ -663,13 +770,20 @@ def stamp_ns(data: bytes | memoryview, msgtype: str, store: Any = None) -> int |
     msgtype : str
         Its type, ``package/msg/Name``.
     """
-    offset = stamp_offset(msgtype, store)
-    if offset is None or len(data) < offset + 8 or data[0] != 0 or data[1] > 1:
+    location = _stamp_location(msgtype, store)
+    if location is None:
         return None
-    sec, nanosec = (_STAMP_LE if data[1] == 1 else _STAMP_BE).unpack_from(data, offset)
+    offset, sequence_at = location
+    if len(data) < offset + 8 or data[0] != 0 or data[1] > 1:
+        return None
+    little = data[1] == 1
+    if sequence_at is not None and (_STRING_LENGTH if little else _STRING_LENGTH_BE
+                                    ).unpack_from(data, sequence_at)[0] == 0:
+        return None  # an empty leading sequence: no first element, no stamp
+    sec, nanosec = (_STAMP_LE if little else _STAMP_BE).unpack_from(data, offset)
     return int(sec) * NS_PER_S + int(nanosec)
 
 
 __all__ = ["CodecError", "Decoder", "ENCAPSULATION_BYTES", "LITTLE_ENDIAN_HEADER", "Layout",
-           "MAX_LAYOUTS", "PRIMITIVES", "Slot", "TIME_TYPE", "decode_many", "layout",
-           "stamp_ns", "stamp_offset"]
+           "MAX_LAYOUTS", "PRIMITIVES", "SEQUENCE", "Slot", "TIME_TYPE", "constants",
+           "decode_many", "layout", "stamp_ns", "stamp_offset"]

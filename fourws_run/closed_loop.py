@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -143,7 +143,8 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
                     law_name: str, model: str = "8dof", dt_s: float = 1e-3,
                     control_period_s: float = 0.01, belief_vehicle: Vehicle | None = None,
                     integrator: str = "rk4", law_options: Mapping[str, Any] | None = None,
-                    tire: str | None = None, max_ticks: int | None = None) -> ClosedLoopResult:
+                    tire: str | None = None, max_ticks: int | None = None,
+                    driver_inputs: Sequence[DriverCommand] | None = None) -> ClosedLoopResult:
     """Run ``maneuver`` with rear-steer law ``law_name`` on ``vehicle`` (no ROS).
 
     Parameters
@@ -170,6 +171,11 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
         Tire model overriding the vehicle's (8-DOF only).
     max_ticks : int, optional
         Stop after this many ticks (a guard for maneuvers that end on a condition).
+    driver_inputs : sequence of DriverCommand, optional
+        The driver's answers, one per tick, in place of the maneuver's (a run driven from
+        outside, replayed from its bag's ``/fourws/driver_input``); the run ends after the
+        last one (or when the maneuver is done). The maneuver still gives the initial speed,
+        the duration and the end.
 
     Returns
     -------
@@ -213,15 +219,17 @@ def run_closed_loop(vehicle: Vehicle, maneuver: Maneuver | ManeuverSpec | str | 
     limit = max_ticks if max_ticks is not None else int(
         math.ceil(man.duration_s / control_period_s)) + 1
     tick = engine.tick
-    for _ in range(limit):
+    if driver_inputs is not None:
+        limit = min(limit, len(driver_inputs) + 1)
+    for k in range(limit):
         t, y = tick.t, tick.outputs
-        if man.done(t, y):
+        if man.done(t, y) or (driver_inputs is not None and k == len(driver_inputs)):
             end_reason = man.abort_reason or "duration"
             end_kind = man.end_kind
             break
         answers.expect(tick)
-        # the maneuver node's answer ...
-        d = man.command(t, y)
+        # the maneuver node's answer (or the outside driver's) ...
+        d = man.command(t, y) if driver_inputs is None else driver_inputs[k]
         if not answers.offer_driver(tick.stamp_ns, d):
             raise ParameterError("maneuver", f"driver input refused at t = {t:.3f} s: "
                                  f"{answers.rejections.last}", man.spec.source or man.name)

@@ -217,8 +217,9 @@ def parse_rear_steer_command(data: bytes | memoryview) -> dict[str, Any]:
 
 
 # ============================================================================ encoders
-def _packer(buf: bytearray, lay: Layout, names: Sequence[str]) -> Callable[..., None]:
-    """``pack(*values)`` writing the fields ``names`` (wire order) of ``lay`` into ``buf``."""
+def field_packer(buf: bytearray, lay: Layout, names: Sequence[str]) -> Callable[..., None]:
+    """``pack(*values)`` writing the fields ``names`` (wire order) of ``lay`` into ``buf``
+    (also the encoders of :mod:`fourws_run.scene_codecs`)."""
     runs = lay.runs(names)
     if len(runs) == 1:  # the usual case: adjacent fields, one struct call
         offset, fmt, _, _ = runs[0]
@@ -250,8 +251,8 @@ class StateEncoder:
     def __init__(self, model: str, frame_id: str) -> None:
         lay = layout(STATE_TYPE, {"header.frame_id": frame_id, "model": model})
         self._buf = buf = lay.template()
-        self._stamp = _packer(buf, lay, _HEADER_STAMP)
-        self._step_time = _packer(buf, lay, ("step", "sim_time_s"))
+        self._stamp = field_packer(buf, lay, _HEADER_STAMP)
+        self._step_time = field_packer(buf, lay, ("step", "sim_time_s"))
         # the outputs go straight into float64 views of the buffer (numpy copies a wheel
         # array in one call); one view per run of adjacent fields
         wanted = set(STATE_SCALARS) | set(STATE_WHEELS)
@@ -314,10 +315,10 @@ class DriverInputEncoder:
     def __init__(self, frame_id: str) -> None:
         lay = layout(DRIVER_INPUT_TYPE, {"header.frame_id": frame_id})
         self._buf = lay.template()
-        self._stamp = _packer(self._buf, lay, _HEADER_STAMP)
+        self._stamp = field_packer(self._buf, lay, _HEADER_STAMP)
         names = driver_input_fields()
         self._fields = tuple((name, lay.slot(name).count) for name in names)
-        self._values = _packer(self._buf, lay, names)
+        self._values = field_packer(self._buf, lay, names)
 
     def encode(self, cmd: DriverCommand, time_s: float) -> bytes:
         """CDR bytes of driver command ``cmd`` stamped ``time_s`` (s, rounded to the ns).
@@ -364,9 +365,9 @@ class RearSteerCommandEncoder:
                                          Callable[..., None]]:
         lay = layout(REAR_STEER_COMMAND_TYPE, {"header.frame_id": self._frame_id, "law": law})
         buf = lay.template()
-        entry = (buf, _packer(buf, lay, _HEADER_STAMP),
-                 _packer(buf, lay, ("angle_rad", "rate_radps")),
-                 _packer(buf, lay, ("state_stamp.sec", "state_stamp.nanosec", "state_step")))
+        entry = (buf, field_packer(buf, lay, _HEADER_STAMP),
+                 field_packer(buf, lay, ("angle_rad", "rate_radps")),
+                 field_packer(buf, lay, ("state_stamp.sec", "state_stamp.nanosec", "state_step")))
         self._buffers[law] = entry
         return entry
 
@@ -433,8 +434,8 @@ class OdometryEncoder:
         lay = layout(ODOMETRY_TYPE, {"header.frame_id": frame_id,
                                      "child_frame_id": child_frame_id})
         self._buf = lay.template()
-        self._stamp = _packer(self._buf, lay, _HEADER_STAMP)
-        self._values = _packer(self._buf, lay, ODOMETRY_FIELDS)
+        self._stamp = field_packer(self._buf, lay, _HEADER_STAMP)
+        self._values = field_packer(self._buf, lay, ODOMETRY_FIELDS)
 
     def encode(self, outputs: Any, stamp_ns: int) -> bytes:
         """CDR bytes of the odometry of ``outputs`` stamped ``stamp_ns`` (ns, the state's
@@ -457,8 +458,8 @@ class ImuEncoder:
     def __init__(self, frame_id: str) -> None:
         lay = layout(IMU_TYPE, {"header.frame_id": frame_id})
         self._buf = lay.template()
-        self._stamp = _packer(self._buf, lay, _HEADER_STAMP)
-        self._values = _packer(self._buf, lay, IMU_FIELDS)
+        self._stamp = field_packer(self._buf, lay, _HEADER_STAMP)
+        self._values = field_packer(self._buf, lay, IMU_FIELDS)
 
     def encode(self, outputs: Any, stamp_ns: int) -> bytes:
         """CDR bytes of the IMU reading of ``outputs`` stamped ``stamp_ns`` (ns)."""
@@ -471,6 +472,6 @@ __all__ = ["CLOCK_TYPE", "ClockEncoder", "CodecError", "DRIVER_INPUT_TYPE", "Dri
            "IMU_FIELDS", "IMU_TYPE", "ImuEncoder", "ODOMETRY_FIELDS", "ODOMETRY_TYPE",
            "OdometryEncoder", "REAR_STEER_COMMAND_TYPE", "RearSteerCommandEncoder",
            "STATE_TYPE", "StateEncoder", "check_finite_mapping", "driver_input_fields",
-           "encode_clock", "imu_values", "odometry_values", "outputs_finite",
+           "encode_clock", "field_packer", "imu_values", "odometry_values", "outputs_finite",
            "parse_driver_input", "parse_rear_steer_command", "parse_state",
            "quaternion_from_euler"]

@@ -43,6 +43,9 @@ from fourws_sim.params import (Vehicle, dataclass_from_mapping, declare_field, l
 
 #: Layout version written by :meth:`RunConfig.to_dict`.
 RUN_CONFIG_VERSION = 2
+#: ``fourws run --driver NAME``: the fourws input-driver nodes (``fourws node <node>``) by the
+#: name that selects them; any other ``--driver`` is a user's command.
+INPUT_DRIVERS = {"ackermann": "ackermann_driver", "joy": "joy_driver"}
 #: The law label of a run whose controller is the user's own and has not said its law.
 USER_LAW = "user"
 
@@ -233,6 +236,7 @@ class RunConfig:
     state_period_s: float = 1e-2
     clock_mode: str = "lockstep"
     controller: ControllerSpec = field(default_factory=ControllerSpec)
+    driver: tuple[str, ...] = ()
     scenario: str = ""
     recorded_topics: tuple[str, ...] = interface.RECORDED_TOPICS
     versions: Mapping[str, str] = field(default_factory=dict)
@@ -242,6 +246,14 @@ class RunConfig:
     def speed_mps(self) -> float:
         """Initial forward speed, m/s (the maneuver's)."""
         return float(self.maneuver.initial_speed_mps)
+
+    @property
+    def driver_node(self) -> str:
+        """The fourws node that drives (``maneuver``, or an input driver of
+        :data:`INPUT_DRIVERS`); '' for a user's driver command (:attr:`driver`)."""
+        if not self.driver:
+            return "maneuver"
+        return INPUT_DRIVERS.get(self.driver[0], "") if len(self.driver) == 1 else ""
 
     @property
     def lockstep(self) -> bool:
@@ -278,6 +290,7 @@ class RunConfig:
             "vehicle": self.vehicle.to_dict(), "belief_vehicle": self.belief.to_dict(),
             "maneuver": self.maneuver.to_dict(), "law": self.law,
             "law_options": dict(self.law_options), "controller": self.controller.to_dict(),
+            "driver": list(self.driver),
             "model": self.model, "tire": self.tire, "integrator": self.integrator,
             "integration_step_s": self.integration_step_s,
             "control_period_s": self.control_period_s,
@@ -329,6 +342,7 @@ class RunConfig:
             state_period_s=float(data.get("state_period_s", 1e-2)),
             clock_mode=str(data.get("clock_mode", "lockstep")),
             controller=ControllerSpec.from_mapping(data.get("controller"), source),
+            driver=tuple(str(a) for a in data.get("driver") or ()),
             scenario=str(scenario), recorded_topics=tuple(topics),
             versions={str(k): str(v) for k, v in dict(data.get("versions") or {}).items()},
             realtime=RealtimeDemand.from_mapping(data.get("realtime"), source))
@@ -396,6 +410,7 @@ def software_versions() -> dict[str, str]:
     return versions
 
 
-__all__ = ["ControllerSpec", "RUN_CONFIG_VERSION", "RealtimeDemand", "RunConfig", "USER_LAW",
+__all__ = ["ControllerSpec", "INPUT_DRIVERS", "RUN_CONFIG_VERSION", "RealtimeDemand", "RunConfig",
+           "USER_LAW",
            "check_node_name",
            "software_versions"]

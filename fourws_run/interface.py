@@ -46,6 +46,13 @@ CLOCK = "/clock"
 #: Recorder progress and accounting (``fourws/msg/RecorderStatus``); lockstep flow control.
 #: Not recorded.
 RECORDER_STATUS = f"{NAMESPACE}/recorder_status"
+#: The car in 3D (REP-105 names): the frames of :data:`FRAMES` at the state rate, the fixed
+#: offsets latched, the URDF of the simulated vehicle (``std_msgs/String``, latched), the
+#: tire forces, velocity, sideslip, path and course as markers.
+TF = "/tf"
+TF_STATIC = "/tf_static"
+ROBOT_DESCRIPTION = "/robot_description"
+MARKERS = f"{NAMESPACE}/markers"
 
 #: Services of the simulator (``std_srvs/srv/Trigger`` and ``std_srvs/srv/SetBool``).
 SRV_RESET = f"{NAMESPACE}/reset"
@@ -74,9 +81,22 @@ TOPIC_TYPES: dict[str, str] = {
     NODE_CONFIG: "std_msgs/msg/String",
     CLOCK: "rosgraph_msgs/msg/Clock",
     RECORDER_STATUS: f"{MSG_PACKAGE}/msg/RecorderStatus",
+    TF: "tf2_msgs/msg/TFMessage",
+    TF_STATIC: "tf2_msgs/msg/TFMessage",
+    ROBOT_DESCRIPTION: "std_msgs/msg/String",
+    MARKERS: "visualization_msgs/msg/MarkerArray",
+}
+#: Topics of other stacks that fourws's driver nodes read (not the run's own, so not recorded
+#: and not in :data:`TOPIC_TYPES`; the driver input they become is): an Ackermann command as
+#: F1TENTH stacks and f1tenth_gym_ros publish it, and a gamepad's ``joy`` node.
+DRIVE = "/drive"
+JOY = "/joy"
+EXTERNAL_TOPIC_TYPES: dict[str, str] = {
+    DRIVE: "ackermann_msgs/msg/AckermannDriveStamped",
+    JOY: "sensor_msgs/msg/Joy",
 }
 #: Topics whose messages are latched (transient local): a late subscriber still gets them.
-LATCHED_TOPICS = (RUN_CONFIG, NODE_CONFIG)
+LATCHED_TOPICS = (RUN_CONFIG, NODE_CONFIG, TF_STATIC, ROBOT_DESCRIPTION)
 #: Topics recorded by default: every graph topic but ``/clock`` (it repeats the state stamps)
 #: and the recorder's own status.
 RECORDED_TOPICS: tuple[str, ...] = tuple(t for t in TOPIC_TYPES
@@ -89,6 +109,20 @@ FRAME_BODY = "base_link"
 #: Wheel count and order of every per-wheel field (FL, FR, RL, RR).
 WHEELS = ("FL", "FR", "RL", "RR")
 assert len(WHEELS) == N_WHEELS
+
+#: The car's frames on ``/tf`` and ``/tf_static`` and the links of its URDF
+#: (:mod:`fourws_run.scene`, :mod:`fourws_run.urdf`). ``base_link`` stays parallel to the
+#: road (REP-105 for a ground vehicle: the frame the wheels, which do not roll with the body,
+#: hang off); ``body`` is the sprung mass, rolled about the roll axis.
+FRAME_SPRUNG = "body"
+#: Per wheel (in :data:`WHEELS` order): the fixed wheel-centre mount on ``base_link``
+#: (``/tf_static``), the steer frame turned by the applied road-wheel angle (the tire frame of
+#: the forces) and the wheel turned by its spin angle.
+FRAME_MOUNT = tuple(f"{w.lower()}_mount" for w in WHEELS)
+FRAME_STEER = tuple(f"{w.lower()}_steer" for w in WHEELS)
+FRAME_WHEEL = tuple(f"{w.lower()}_wheel" for w in WHEELS)
+#: Every frame the simulator publishes, parents before children.
+FRAMES = (FRAME_ODOM, FRAME_BODY, FRAME_SPRUNG, *FRAME_MOUNT, *FRAME_STEER, *FRAME_WHEEL)
 
 #: Fields of ``VehicleState`` that describe the message rather than the vehicle (the
 #: simulator fills them from its clock and model name); every other field is a model output.
@@ -174,13 +208,18 @@ WRITER_ROLES: dict[str, tuple[Role, ...]] = {
     RUN_CONFIG: (Role.LAUNCHER,),
     NODE_CONFIG: (Role.SIMULATOR, Role.MANEUVER, Role.CONTROLLER),
     RECORDER_STATUS: (Role.RECORDER,),
+    TF: (Role.SIMULATOR,),
+    TF_STATIC: (Role.SIMULATOR,),
+    ROBOT_DESCRIPTION: (Role.SIMULATOR,),
+    MARKERS: (Role.SIMULATOR,),
 }
 assert set(WRITER_ROLES) == set(TOPIC_TYPES)
 
 #: Topics whose publishers report their published counts in their status messages (the
 #: simulator's ``SimulatorStatus`` and the maneuver's ``ManeuverStatus``); the controller's
 #: count is its publisher's sequence number (:mod:`fourws_run.accounting`).
-SIMULATOR_COUNTED = (STATE, ODOM, IMU, SIM_STATUS, NODE_CONFIG)
+SIMULATOR_COUNTED = (STATE, ODOM, IMU, SIM_STATUS, NODE_CONFIG, TF, TF_STATIC,
+                     ROBOT_DESCRIPTION, MARKERS)
 MANEUVER_COUNTED = (DRIVER_INPUT, MANEUVER_STATUS, NODE_CONFIG)
 
 NS_PER_S = 1_000_000_000
@@ -199,11 +238,15 @@ def times_to_ns(time_s: Any) -> Any:
 
 
 __all__ = [
-    "CLOCK", "DRIVER_INPUT", "FRAME_BODY", "FRAME_ODOM", "IMU", "LATCHED_TOPICS",
+    "CLOCK", "DRIVE", "DRIVER_INPUT", "EXTERNAL_TOPIC_TYPES", "FRAMES", "FRAME_BODY",
+    "FRAME_MOUNT", "FRAME_ODOM",
+    "FRAME_SPRUNG", "FRAME_STEER", "FRAME_WHEEL", "IMU", "JOY", "LATCHED_TOPICS", "MARKERS",
     "LEGACY_MSG_PACKAGES", "MANEUVER_COUNTED", "MANEUVER_STATUS", "MSG_DIR", "MSG_PACKAGE",
     "MessageDefinitionError", "NAMESPACE", "NODE_CONFIG", "NODE_NAMES", "NS_PER_S", "N_WHEELS",
-    "ODOM", "REAR_STEER_CMD", "RECORDED_TOPICS", "RECORDER_STATUS", "RUN_CONFIG", "Role",
+    "ODOM", "REAR_STEER_CMD", "RECORDED_TOPICS", "RECORDER_STATUS", "ROBOT_DESCRIPTION",
+    "RUN_CONFIG", "Role",
     "SIMULATOR_COUNTED", "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATE_ENVELOPE",
-    "STATE_SCALARS", "STATE_WHEELS", "TOPIC_TYPES", "WHEELS", "WRITER_ROLES",
+    "STATE_SCALARS", "STATE_WHEELS", "TF", "TF_STATIC", "TOPIC_TYPES", "WHEELS",
+    "WRITER_ROLES",
     "state_output_fields", "time_to_ns", "times_to_ns",
 ]

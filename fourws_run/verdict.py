@@ -197,6 +197,10 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
                          f"the scenario's realtime.min_realtime_factor {pace:g} "
                          f"({record.overruns} overruns, max lateness "
                          f"{record.max_lateness_s * 1e3:.1f} ms)")
+    elif not config.driver_node and end.startswith("end time"):
+        # a user's driver: the simulator ended the run at the maneuver's duration
+        record.outcome = Outcome.COMPLETED
+        record.reason = end
     elif man is None or not man.done:
         record.outcome = Outcome.FAILED
         record.reason = f"the simulation ended without the maneuver's end ({end})"

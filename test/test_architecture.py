@@ -53,6 +53,7 @@ LAYERS: dict[str, int] = {
     "fourws_analysis": 3,
     "fourws_study": 4,
     "fourws_ros": 4,
+    "fourws_api": 4,
     "fourws_cli": 5,
 }
 #: Packages that may import rclpy and ROS message packages.
@@ -62,7 +63,8 @@ ROS_LAYERS = ("fourws_ros", "fourws_cli")
 ROS_NAMES = frozenset({"rclpy", "rosidl_runtime_py", "rosidl_parser", "rosidl_adapter",
                        "rpyutils", "launch", "launch_ros", "ament_index_python", "fourws"})
 #: The core packages, imported with ROS blocked by :func:`test_core_imports_without_ros`.
-CORE = ("fourws_sim", "fourws_control", "fourws_run", "fourws_analysis", "fourws_study")
+CORE = ("fourws_sim", "fourws_control", "fourws_run", "fourws_analysis", "fourws_study",
+        "fourws_api")
 #: Shortest reason accepted for a function-level import, characters.
 MIN_REASON_CHARS = 12
 

@@ -47,6 +47,9 @@ LIBRARIES: dict[str, tuple[str, str]] = {
     "mcap": ("mcap-ros2-support", "mcap"),
     "pytest": ("python3-pytest", "pytest"),
     "hypothesis": ("python3-hypothesis", "hypothesis"),
+    # the ROS package urdfdom_py (ros/urdf_parser_py) installs the module urdf_parser_py; its
+    # rosdep key is the package name (rosdistro: distribution.yaml, repository urdfdom_py)
+    "urdf_parser_py": ("urdfdom_py", "urdf-parser-py"),
 }
 #: Import name -> (the distribution its rosdep key installs, the requirement of that
 #: distribution that brings the imported library): mcap-ros2-support 0.6.0's requires_dist on
@@ -61,10 +64,16 @@ PIP_ONLY: dict[str, str] = {
     "pyarrow": "pyarrow",
     "distributed": "dask",
     "threadpoolctl": "threadpoolctl",
+    # the live view's Foxglove WebSocket server (fourws run --live): no rosdep key either
+    "foxglove": "foxglove-sdk",
 }
 #: ROS packages imported only by the launch file: ``ros2 launch`` brings them on a system ROS
 #: install; they are not on PyPI (the venv uses ``fourws run`` instead).
 NOT_ON_PYPI = ("launch", "launch_ros")
+#: ROS interface packages with no PyPI wheel: ``make setup`` builds them from the definitions
+#: vendored in interfaces/ (interfaces/SOURCE.md); a system ROS install has them (rosdep key =
+#: the package name).
+VENDORED = ("tf2_msgs", "ackermann_msgs")
 #: Keys of package.xml that no module imports: the build and test tools of the package.
 TOOL_KEYS = ("ament_cmake", "ament_cmake_python", "rosidl_default_generators",
              "rosidl_default_runtime", "builtin_interfaces", "std_msgs", "ament_cmake_pytest",
@@ -134,7 +143,7 @@ def _key_and_pip(module: str, ros: set[str]) -> tuple[str, str | None]:
         return LIBRARIES[module]
     if module in PIP_ONLY:
         return "", PIP_ONLY[module]
-    if module in NOT_ON_PYPI:
+    if module in NOT_ON_PYPI or module in VENDORED:
         return module, None
     if module in ros:
         return module, "ros-" + module.replace("_", "-")  # the ROS 2 wheels' naming
@@ -159,7 +168,7 @@ def test_every_runtime_import_is_an_exec_dependency(imports) -> None:
     # the venv and pip installs: requirements.txt, and setup.py for the plain libraries
     requirements, install_requires = _requirements(), _install_requires()
     no_pip = {m for m in runtime if (_key_and_pip(m, ros)[1] or "") not in requirements
-              and m not in NOT_ON_PYPI}
+              and m not in NOT_ON_PYPI and m not in VENDORED}
     assert not no_pip, f"imports missing from requirements.txt: {sorted(no_pip)}"
     plain = {LIBRARIES[m][1] for m in runtime if m in LIBRARIES}
     assert plain <= install_requires, \
@@ -175,8 +184,20 @@ def test_every_test_import_is_declared(imports) -> None:
                if m not in PIP_ONLY and _key_and_pip(m, ros)[0] not in keys}
     assert not missing, f"test imports with no <test_depend> in package.xml: {missing}"
     requirements = _requirements()
-    no_pip = {m for m in tests if (_key_and_pip(m, ros)[1] or "") not in requirements}
+    no_pip = {m for m in tests if (_key_and_pip(m, ros)[1] or "") not in requirements
+              and m not in VENDORED}
     assert not no_pip, f"test imports missing from requirements.txt: {sorted(no_pip)}"
+
+
+def test_every_vendored_interface_is_built_by_setup() -> None:
+    """interfaces/ holds exactly the packages of :data:`VENDORED`, each with its licence, and
+    the Makefile builds each (VENDORED_INTERFACES)."""
+    folders = sorted(p.parent.name for p in (ROOT / "interfaces").glob("*/package.xml"))
+    assert folders == sorted(VENDORED)
+    assert all((ROOT / "interfaces" / name / "LICENSE").is_file() for name in folders)
+    makefile = (ROOT / "Makefile").read_text()
+    line = next(s for s in makefile.splitlines() if s.startswith("VENDORED_INTERFACES :="))
+    assert sorted(p.split("/")[-1] for p in line.split(":=")[1].split()) == folders
 
 
 def test_every_declared_key_is_known(imports) -> None:

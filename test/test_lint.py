@@ -22,7 +22,9 @@ PYTHON = [*sorted(ROOT.glob("fourws_*")), ROOT / "test", ROOT / "launch", ROOT /
 #: Files with an SPDX header: code, configuration and build files. Not the message definitions
 #: (their leading comment is the message's documentation, shown by ``ros2 interface show``
 #: and stored in every bag), the docs, the generated or plain lists (requirements*) and the
-#: recorded test data (test/data: a bag as an earlier fourws wrote it).
+#: recorded test data (test/data: a bag as an earlier fourws wrote it), nor the vendored
+#: interface packages of interfaces/ (other projects' files under their own licences,
+#: interfaces/SOURCE.md; test_dependencies checks each carries its LICENSE).
 HEADER_SUFFIXES = (".py", ".yaml", ".cfg", ".ini", ".xml")
 HEADER_NAMES = ("CMakeLists.txt", "Makefile", ".ci/run")
 SPDX = "SPDX-License-Identifier: Apache-2.0"
@@ -44,7 +46,7 @@ def _sources() -> list[Path]:
         pytest.skip("not a git checkout: the source files are the tracked ones")
     names = [n for n in listed.stdout.splitlines() if (ROOT / n).is_file()]
     return [ROOT / n for n in names if (n.endswith(HEADER_SUFFIXES) or n in HEADER_NAMES)
-            and not n.startswith("test/data/")]
+            and not n.startswith(("test/data/", "interfaces/"))]
 
 
 def test_every_source_file_has_an_spdx_header() -> None:

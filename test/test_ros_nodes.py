@@ -611,6 +611,10 @@ def test_expected_subscribers_of_the_default_run():
     assert counts[topics.REAR_STEER_CMD] == 2
     assert counts[topics.DRIVER_INPUT] == 3
     assert all(counts[t] >= 1 for t in config.recorded_topics)
+    # the volatile statuses: every reader (a count of 1 could be met by the wrong one) -- the
+    # simulator's: maneuver, controller, launcher, recorder; the maneuver's: simulator,
+    # launcher, recorder
+    assert counts[topics.SIM_STATUS] == 4 and counts[topics.MANEUVER_STATUS] == 3
     unrecorded = expected_subscribers(config, recorded=False)
     assert unrecorded[topics.STATE] == 2 and topics.ODOM not in unrecorded
 
