@@ -28,8 +28,6 @@ import fourws_cli
 from fourws_cli.nodes import HELP as NODE_HELP
 from fourws_cli.nodes import NODES, run_node
 from fourws_sim.errors import FourwsError, one_line
-from fourws_sim.lanes import use_wide_vectors
-from fourws_sim.params import find_resource_dir
 
 #: Exit code of a user error: bad input, or an output that cannot be written.
 EXIT_USER_ERROR = 2
@@ -56,6 +54,9 @@ def fourws_version() -> str:
         return version("fourws")
     except PackageNotFoundError:
         pass
+    # numpy with it: not at the top, where `fourws node` must not import it before its
+    # stop-while-starting handler is set (fourws_cli.nodes)
+    from fourws_sim.params import find_resource_dir
     root = find_resource_dir(Path(__file__).resolve().parent.parent, "fourws", "",
                              "package.xml")
     try:
@@ -96,6 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     # the environment) with 512-bit vectors; before anything is compiled (fourws_sim.lanes)
     if (argv[:1] == ["study"] and argv[1:2] != ["rerun"]) or (
             argv[:1] == ["bench"] and "--study" in argv):
+        from fourws_sim.lanes import use_wide_vectors  # numpy: not for `fourws node`
         use_wide_vectors()
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)

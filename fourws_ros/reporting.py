@@ -223,13 +223,21 @@ def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
                    watch: RecorderWatch | None = None,
                    timeout_s: float = DELIVERY_TIMEOUT_S) -> bool:
     """Wait until every matched subscriber has acknowledged what this node published (the
-    simulator needs the maneuver's last status, the recorder everything). Gives up, False
-    with an error logged, after ``timeout_s`` or once the recorder has gone silent (a killed
-    recorder's readers stay in the graph for seconds and never acknowledge)."""
+    simulator needs the maneuver's last status, the recorder everything) and, once a recorder
+    was heard (``watch``), until it reports them stored. Gives up, False with an error logged,
+    after ``timeout_s`` or once the recorder has gone silent (a killed recorder's readers stay
+    in the graph for seconds and never acknowledge).
+
+    Acknowledged is not stored: the recorder takes a message only from a publisher the ROS
+    graph names as the run's node, and holds the others until the graph does. A node that
+    left at once, its messages acknowledged, could leave the graph before the recorder's
+    graph had named it (a run that ended within a second of starting, on a loaded machine):
+    its messages were then foreign for good and the bag incomplete."""
     deadline = time.monotonic() + timeout_s
     now = Duration(seconds=0)
     while True:
-        if all(c.pub.wait_for_all_acked(now) for c in counts.publishers):
+        if all(c.pub.wait_for_all_acked(now) for c in counts.publishers) and (
+                watch is None or watch.stored is None or watch.holds(counts.counts)):
             return True
         if watch is not None and watch.silent():
             logger.error("the recorder went silent before it held everything this node "
@@ -237,8 +245,13 @@ def wait_delivered(counts: PublishCounts, logger: Any, executor: Any = None,
             return False
         if time.monotonic() > deadline:
             late = [c.topic for c in counts.publishers if not c.pub.wait_for_all_acked(now)]
-            logger.error(f"not every subscriber acknowledged {', '.join(late)} within "
-                         f"{timeout_s:.0f} s")
+            if late:
+                logger.error(f"not every subscriber acknowledged {', '.join(late)} within "
+                             f"{timeout_s:.0f} s")
+            else:
+                logger.error(f"the recorder did not report storing everything this node "
+                             f"published within {timeout_s:.0f} s (published "
+                             f"{counts.counts}, stored {watch.stored if watch else {}})")
             return False
         if executor is not None:
             executor.spin_once(timeout_sec=0.05)
