@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
 import sys
 import xml.etree.ElementTree as ET
@@ -109,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 1
     try:
-        return int(args._run(args) or 0)
+        return _leave_if_stuck(int(args._run(args) or 0))
     except FourwsError as exc:
         print(f"fourws {args.command}: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_USER_ERROR
@@ -121,6 +122,18 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"fourws {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _leave_if_stuck(code: int) -> int:
+    """``code``; but a process holding a ROS participant stuck in Fast DDS (see
+    ``fourws_ros.launcher_node.ABANDONED``) leaves at once with it: a normal exit destroys
+    the participant again and hangs."""
+    launcher = sys.modules.get("fourws_ros.launcher_node")
+    if launcher is not None and launcher.ABANDONED:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
 
 
 #: Options of the subcommands that name a file or folder to write.

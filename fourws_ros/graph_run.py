@@ -33,7 +33,7 @@ from typing import Any, Callable
 
 from fourws_ros import node_params, topics
 from fourws_ros.domains import DomainError, domain_for_run, graph_env
-from fourws_ros.launcher_node import LauncherNode, RunState
+from fourws_ros.launcher_node import CLOSE_TIMEOUT_S, LauncherNode, RunState
 from fourws_ros.processes import (ProcessGroup, describe_exit, node_command, ros_args,
                                   set_fifo, user_command)
 from fourws_ros.startup import wait_for_graph
@@ -117,6 +117,10 @@ def prepare_run_dir(out_dir: Path, run_name: str, overwrite: bool) -> Path:
         raise LaunchError(f"cannot create run folder {run_dir}: "
                           f"{exc.strerror or exc}") from None
     return run_dir
+
+
+#: Domain leases of runs whose launcher participant could not be closed (kept until exit).
+_HELD_LEASES: list[Any] = []
 
 
 def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
@@ -216,9 +220,15 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         finally:
             failure = _finish(config, group, ros, state, interrupt, failure, bag_path, names,
                               echo)
-            if ros is not None:
-                ros.close()
-            lease.release()
+            if ros is not None and not ros.close():
+                # stuck in Fast DDS (launcher_node.CLOSE_TIMEOUT_S): the domain stays held by
+                # this process, so a next run does not meet the stuck participant
+                echo("  note: the launcher's ROS participant did not close within "
+                     f"{CLOSE_TIMEOUT_S:.0f} s (a Fast DDS teardown deadlock); left open, "
+                     f"ROS domain {lease.domain_id} held until this process exits")
+                _HELD_LEASES.append(lease)
+            else:
+                lease.release()
         record.exit_codes = group.exit_codes()
     if state.t_start:
         record.wall_time_s = max(state.t_end - state.t_start, 0.0)

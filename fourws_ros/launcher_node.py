@@ -12,6 +12,7 @@ answer can say what that node was waiting for.
 from __future__ import annotations
 
 import os
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -33,6 +34,18 @@ from fourws_run.verdict import ManeuverReport, SimReport
 Role = topics.Role
 #: Log levels kept from ``/rosout`` (rcl_interfaces/Log: WARN 30, ERROR 40, FATAL 50).
 _KEPT_LEVELS = (Log.WARN, Log.ERROR, Log.FATAL)
+
+
+#: How long the launcher's own participant may take to close, s. Fast DDS 3.2 can deadlock
+#: while a participant removes a peer's endpoints on its receive thread and its event thread
+#: wants the discovery lock (eProsima/Fast-DDS#6502): destroying a publisher then waits for
+#: ever (seen as a run whose recorder was killed ended). The run's outcome is known by
+#: then; the teardown is left to its thread.
+CLOSE_TIMEOUT_S = 10.0
+#: Launcher nodes whose close did not end (their participants are stuck in Fast DDS): kept
+#: alive, never destroyed; a process holding one leaves with ``os._exit`` (exiting normally
+#: would destroy the stuck participant again and hang).
+ABANDONED: list["LauncherNode"] = []
 
 
 @dataclass
@@ -204,11 +217,24 @@ class LauncherNode:
         self.executor.spin_until_future_complete(future, timeout_sec=10.0)
         return future.done()
 
-    def close(self) -> None:
-        """Destroy the node and its context."""
-        self.executor.shutdown(timeout_sec=1.0)
-        self.node.destroy_node()
-        self.context.try_shutdown()
+    def close(self) -> bool:
+        """Destroy the node and its context; False if that did not end within
+        :data:`CLOSE_TIMEOUT_S` (the participant is then left as it is, see
+        :data:`ABANDONED`)."""
+        done = threading.Event()
+
+        def teardown() -> None:
+            self.executor.shutdown(timeout_sec=1.0)
+            self.node.destroy_node()
+            self.context.try_shutdown()
+            done.set()
+
+        thread = threading.Thread(target=teardown, daemon=True, name="fourws-launcher-close")
+        thread.start()
+        if done.wait(CLOSE_TIMEOUT_S):
+            return True
+        ABANDONED.append(self)
+        return False
 
 
-__all__ = ["LauncherNode", "RunState"]
+__all__ = ["ABANDONED", "CLOSE_TIMEOUT_S", "LauncherNode", "RunState"]

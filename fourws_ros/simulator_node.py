@@ -74,9 +74,9 @@ HOUSEKEEPING_S = 0.01
 FINAL_WAIT_S = 10.0
 #: Topics whose counts the simulator knows for flow control: its own recorded publications
 #: and the answers it accepted.
-FLOW_TOPICS = (topics.STATE, topics.ODOM, topics.IMU, topics.SIM_STATUS, topics.DRIVER_INPUT,
-               topics.REAR_STEER_CMD, topics.TF, topics.MARKERS, topics.TF_STATIC,
-               topics.ROBOT_DESCRIPTION)
+FLOW_TOPICS = (*(t for t in topics.RECORDED_TOPICS
+                 if topics.WRITER_ROLES[t] == (topics.Role.SIMULATOR,)),
+               topics.DRIVER_INPUT, topics.REAR_STEER_CMD)
 
 
 class SimulatorNode(Node):

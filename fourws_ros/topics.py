@@ -54,7 +54,8 @@ from fourws_run.interface import (CLOCK, DRIVE, DRIVER_INPUT, EXTERNAL_TOPIC_TYP
                                   MARKERS, NAMESPACE, NODE_CONFIG, NODE_NAMES, ODOM,
                                   REAR_STEER_CMD, RECORDED_TOPICS, RECORDER_STATUS,
                                   ROBOT_DESCRIPTION, RUN_CONFIG, SIM_STATUS, SRV_PAUSE,
-                                  SRV_RESET, STATE, TF, TF_STATIC, TOPIC_TYPES, Role)
+                                  SRV_RESET, STATE, TF, TF_STATIC, TOPIC_TYPES, WRITER_ROLES,
+                                  Role)
 
 #: History depth of the message streams (messages): 2 s of a 1 kHz stream.
 STREAM_DEPTH = 2000
@@ -131,4 +132,4 @@ __all__ = ["CLOCK", "CLOCK_QOS", "DRIVE", "DRIVER_INPUT", "DRIVE_QOS", "FRAME_BO
            "RECORDED_TOPICS", "RECORDER_STATUS", "ROBOT_DESCRIPTION", "RUN_CONFIG", "Role",
            "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATUS_DEPTH", "STATUS_QOS",
            "STREAM_DEPTH", "STREAM_QOS", "TF", "TF_STATIC", "TOPIC_QOS", "TOPIC_TYPES",
-           "message_class"]
+           "WRITER_ROLES", "message_class"]

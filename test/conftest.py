@@ -49,3 +49,24 @@ def ros_domain(monkeypatch: pytest.MonkeyPatch):
         yield lease.domain_id
     finally:
         lease.release()
+
+
+_EXIT_STATUS: list[int] = []
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    _EXIT_STATUS.append(int(exitstatus))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """A run in this process whose launcher participant stuck in Fast DDS
+    (``fourws_ros.launcher_node.ABANDONED``): leave with the session's status once everything
+    is reported, as ``fourws`` does (a normal exit destroys the stuck participant and hangs)."""
+    import sys
+
+    launcher = sys.modules.get("fourws_ros.launcher_node")
+    if launcher is not None and launcher.ABANDONED:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(_EXIT_STATUS[-1] if _EXIT_STATUS else 1)
