@@ -452,7 +452,7 @@ def _levels(res: RunAnalysis, vehicle: Any, belief: Any,
                                          **dict(options)))))
 
 
-def past_limits(res: RunAnalysis, metric: str) -> bool:
+def _past_limits(res: RunAnalysis, metric: str) -> bool:
     """True (and ``metric`` marked unavailable with the reason) if the run's car broke its
     vehicle limits: a handling metric of it would describe the spin."""
     breach = res.vehicle_breach
@@ -599,7 +599,7 @@ def _frequency_response(res: RunAnalysis, ch: Mapping[str, np.ndarray],
             f"needs a {', '.join(fq.FREQUENCY_MANEUVERS)} run (an excitation band); "
             f"this run is {man or 'unrecognized'}")
         return
-    if past_limits(res, "frequency_response"):
+    if _past_limits(res, "frequency_response"):
         return
     tick(f"{run.name}: frequency response")
     method = "transient" if man in fq.TRANSIENT_MANEUVERS else "welch"
@@ -631,9 +631,9 @@ def _step_response(res: RunAnalysis, ch: Mapping[str, np.ndarray], tick: Progres
                                            f"{man or 'unrecognized'}")
         return
     if res.vehicle_breach is not None:
-        past_limits(res, "identified_modes")
+        _past_limits(res, "identified_modes")
         if man in STEP_MANEUVERS:
-            past_limits(res, "iso7401_step")
+            _past_limits(res, "iso7401_step")
         return
     tick(f"{run.name}: step metrics and modes")
     if man in STEP_MANEUVERS:
@@ -664,7 +664,7 @@ def _steady_state(res: RunAnalysis, ch: Mapping[str, np.ndarray], vehicle: Any,
             f"needs a slow_ramp_steer or constant_radius run; this run is "
             f"{man or 'unrecognized'}")
         return
-    if past_limits(res, "iso4138_steady_state"):
+    if _past_limits(res, "iso4138_steady_state"):
         return
     tick(f"{run.name}: steady-state handling")
 
@@ -691,7 +691,7 @@ def _iso3888(res: RunAnalysis, ch: Mapping[str, np.ndarray], tick: Progress) -> 
         res.unavailable["iso3888_lane_change"] = (f"needs a double_lane_change run; this run "
                                                   f"is {man or 'unrecognized'}")
         return
-    if past_limits(res, "iso3888_lane_change"):
+    if _past_limits(res, "iso3888_lane_change"):
         return
     tick(f"{run.name}: lane change")
     res.lane_change = _try(res, "iso3888_lane_change",
