@@ -47,6 +47,7 @@ from fourws_run.interface import RUN_CONFIG as TOPIC_RUN_CONFIG
 from fourws_run.interface import STATE as TOPIC_STATE
 from fourws_run.interface import TOPIC_TYPES
 from fourws_sim.errors import FourwsError, ParameterError
+from fourws_sim.outcome import DEFAULT_LIMITS, VehicleLimits, Violation, vehicle_limits_from
 
 _NS_PER_S = interface.NS_PER_S
 #: Bounds of the resampling step of :func:`resample`: at most this many samples per recorded
@@ -406,6 +407,11 @@ class UniformRun:
         steer is inside the plant), so the analysis uses the command when it exists.
     config : dict
         Run configuration.
+    vehicle_breach : Violation or None
+        The first recorded state past the run's vehicle limits (:func:`run_limits`; found by
+        :func:`resample` on the recorded states, before interpolation): the car spun, drove
+        backwards or left the model's range there, and the record after it is no handling
+        result. None: no state broke them.
     """
 
     name: str
@@ -413,12 +419,29 @@ class UniformRun:
     dt_s: float
     channels: dict[str, np.ndarray]
     config: dict[str, Any]
+    vehicle_breach: Violation | None = None
 
     @property
     def maneuver(self) -> str:
         """Maneuver type of the run configuration."""
         man = self.config.get("maneuver")
         return str(man.get("type", "")) if isinstance(man, Mapping) else str(man or "")
+
+
+def run_limits(config: Mapping[str, Any], source: str | None = None) -> VehicleLimits:
+    """The :class:`~fourws_sim.outcome.VehicleLimits` of a run: its maneuver's
+    ``vehicle_limits`` in the run configuration (a scenario's are written into it), the
+    defaults when it has none.
+
+    Raises
+    ------
+    ParameterError
+        ``maneuver.vehicle_limits`` is malformed.
+    """
+    man = config.get("maneuver")
+    if not isinstance(man, Mapping) or man.get("vehicle_limits") is None:
+        return DEFAULT_LIMITS
+    return vehicle_limits_from(man["vehicle_limits"], source, prefix="maneuver.vehicle_limits.")
 
 
 def _monotonic(time_s: np.ndarray, values: np.ndarray,
@@ -480,10 +503,15 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
     n = int(math.floor(span_s / dt_s + 1e-9)) + 1
     grid = order_t[0] + dt_s * np.arange(n)
     channels: dict[str, np.ndarray] = {}
+    recorded: dict[str, np.ndarray] = {}
     for name in STATE_CHANNELS:
         if name in state.fields:
             t, v = _monotonic(t_raw, state.fields[name].astype(np.float64), state_order)
             channels[name] = np.interp(grid, t, v)
+            recorded[name] = v
+    breach = run_limits(run.config, f"{run.path}:/fourws/run_config").first_violation(
+        order_t, recorded.get("sideslip_rad"), recorded.get("speed_mps"),
+        recorded.get("roll_rad"))
     driver = run.topics.get(TOPIC_DRIVER)
     if driver is not None and len(driver) >= 2 and "steering_wheel_angle_rad" in driver.fields:
         # zero-order hold: a driver command holds until the next one
@@ -501,7 +529,7 @@ def resample(run: RunData, dt_s: float | None = None) -> UniformRun:
         if ratio is not None and "front_wheel_angle_rad" in channels:
             channels["steering_wheel_angle_rad"] = channels["front_wheel_angle_rad"] * ratio
     return UniformRun(name=run.name, time_s=grid, dt_s=float(dt_s), channels=channels,
-                      config=run.config)
+                      config=run.config, vehicle_breach=breach)
 
 
 #: A grid point this fraction of a step before a command's stamp counts as at it: the grid

@@ -20,6 +20,15 @@ maneuver                                    metrics
 every run with a vehicle                    eigenvalues of the linearized 8-DOF vs speed
 ==========================================  =============================================
 
+A run whose car broke its maneuver's :class:`~fourws_sim.outcome.VehicleLimits` (it spun,
+drove backwards or left the model's range: :attr:`fourws_analysis.bag.UniformRun.vehicle_breach`,
+the rule that ends a graph run and the offline twin ``spun``/``diverged``) is flagged: its
+metrics say so under ``vehicle_limits`` (kind, time, reason), and the metrics of a handling
+response -- the frequency response, the ISO 7401 step metrics and identified modes, the
+ISO 4138 gradients, the ISO 3888-2 lane change -- are not computed (``unavailable`` names the
+breach): they would describe the spin, not the car. The regulation and standard tests
+(:mod:`fourws_analysis.standards`) judge a car that may spin and are kept.
+
 Model overlays (analytic 2-DOF/3-DOF closed with the run's law, and the 8-DOF linearized
 numerically at the run's straight-running trim) need the vehicle mapping of the run config.
 The law is rebuilt for the period it ran at (``controller_period_s`` of the run config, else
@@ -46,6 +55,7 @@ from fourws_analysis.bag import MetricUnavailableError, UniformRun
 from fourws_control import Law, LinearGains, make_law
 from fourws_sim.errors import FourwsError
 from fourws_sim.models import get_model
+from fourws_sim.outcome import Violation
 from fourws_sim.params import vehicle_from_mapping
 
 STEP_MANEUVERS = ("step_steer", "ramp_steer")
@@ -149,6 +159,12 @@ class RunAnalysis:
         return self.run.name
 
     @property
+    def vehicle_breach(self) -> Violation | None:
+        """The first state past the run's vehicle limits (None: none), see the module
+        docstring."""
+        return self.run.vehicle_breach
+
+    @property
     def law(self) -> str:
         """Rear-steer law of the run as its bag describes it (``unknown`` when the bag does
         not say: a law is never guessed)."""
@@ -188,6 +204,10 @@ class RunAnalysis:
                 "applied_to_commanded_front_angle": self.applied_to_commanded,
             },
         }
+        if self.vehicle_breach is not None:
+            out["vehicle_limits"] = {"kind": self.vehicle_breach.kind,
+                                     "time_s": self.vehicle_breach.time_s,
+                                     "reason": self.vehicle_breach.reason}
         if self.step_amplitude:
             out["step_amplitude"] = self.step_amplitude
         if self.frequency_metrics:
@@ -432,6 +452,17 @@ def _levels(res: RunAnalysis, vehicle: Any, belief: Any,
                                          **dict(options)))))
 
 
+def _past_limits(res: RunAnalysis, metric: str) -> bool:
+    """True (and ``metric`` marked unavailable with the reason) if the run's car broke its
+    vehicle limits: a handling metric of it would describe the spin."""
+    breach = res.vehicle_breach
+    if breach is None:
+        return False
+    res.unavailable[metric] = (f"{breach.reason}; the run ended {breach.kind} there and "
+                               "its record is no handling response")
+    return True
+
+
 def _try(result: RunAnalysis, metric: str, fn: Callable[[], Any]) -> Any:
     try:
         return fn()
@@ -493,6 +524,9 @@ def _start(run: UniformRun) -> tuple[RunAnalysis, dict[str, np.ndarray]]:
     else:
         notes = []
     res = RunAnalysis(run=run, speed_mps=speed, notes=notes)
+    if run.vehicle_breach is not None:
+        res.notes.append(f"{run.vehicle_breach.reason}: the run ended "
+                         f"{run.vehicle_breach.kind} at t = {run.vehicle_breach.time_s:.2f} s")
     if not run.maneuver:
         res.notes.append("maneuver not recognized (run_config has no maneuver.type): "
                          "metrics chosen from the data are skipped")
@@ -565,6 +599,8 @@ def _frequency_response(res: RunAnalysis, ch: Mapping[str, np.ndarray],
             f"needs a {', '.join(fq.FREQUENCY_MANEUVERS)} run (an excitation band); "
             f"this run is {man or 'unrecognized'}")
         return
+    if _past_limits(res, "frequency_response"):
+        return
     tick(f"{run.name}: frequency response")
     method = "transient" if man in fq.TRANSIENT_MANEUVERS else "welch"
     for inp in FR_INPUTS:
@@ -593,6 +629,11 @@ def _step_response(res: RunAnalysis, ch: Mapping[str, np.ndarray], tick: Progres
     if man not in STEP_MANEUVERS and man != "pulse":
         res.unavailable["iso7401_step"] = (f"needs a step_steer or ramp_steer run; this run is "
                                            f"{man or 'unrecognized'}")
+        return
+    if res.vehicle_breach is not None:
+        _past_limits(res, "identified_modes")
+        if man in STEP_MANEUVERS:
+            _past_limits(res, "iso7401_step")
         return
     tick(f"{run.name}: step metrics and modes")
     if man in STEP_MANEUVERS:
@@ -623,6 +664,8 @@ def _steady_state(res: RunAnalysis, ch: Mapping[str, np.ndarray], vehicle: Any,
             f"needs a slow_ramp_steer or constant_radius run; this run is "
             f"{man or 'unrecognized'}")
         return
+    if _past_limits(res, "iso4138_steady_state"):
+        return
     tick(f"{run.name}: steady-state handling")
 
     def steady() -> iso4138.SteadyStateHandling:
@@ -647,6 +690,8 @@ def _iso3888(res: RunAnalysis, ch: Mapping[str, np.ndarray], tick: Progress) -> 
     if man != "double_lane_change":
         res.unavailable["iso3888_lane_change"] = (f"needs a double_lane_change run; this run "
                                                   f"is {man or 'unrecognized'}")
+        return
+    if _past_limits(res, "iso3888_lane_change"):
         return
     tick(f"{run.name}: lane change")
     res.lane_change = _try(res, "iso3888_lane_change",

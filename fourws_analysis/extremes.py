@@ -15,11 +15,7 @@ from typing import Any
 
 import numpy as np
 
-#: A run whose |sideslip| exceeds this has spun, rad (20 deg). A car under control stays far
-#: below it: the ISO 3888-2 runs of fourws keep under 10 deg with every stable law
-#: (``test/test_maneuvers.py``), and the ISO 4138 ramp already calls 0.15 rad (8.6 deg) the end
-#: of quasi-steady driving (``slow_ramp_steer.max_sideslip_rad``).
-SPIN_SIDESLIP_RAD = math.radians(20.0)
+from fourws_sim.outcome import DEFAULT_LIMITS, VehicleLimits
 #: An actuator sample counts as at a limit within this fraction of it (the actuator clips to
 #: the limit exactly; the margin absorbs the rounding of a limit times a period).
 LIMIT_RTOL = 1e-9
@@ -39,7 +35,8 @@ class RunExtremes:
     time_at_rear_rate_limit_s : float
         Time its angle moved at its rate limit, s.
     spin_time_s : float or None
-        First time |sideslip| exceeded the spin threshold, s (None: never).
+        First time the car spun by the run's :class:`~fourws_sim.outcome.VehicleLimits`
+        (|sideslip| or reversing past its limit), s (None: never).
     """
 
     max_abs_sideslip_rad: float
@@ -62,8 +59,8 @@ def _peak(values: np.ndarray) -> float:
 def run_extremes(time_s: np.ndarray, sideslip_rad: np.ndarray, yaw_rate_radps: np.ndarray,
                  lateral_accel_mps2: np.ndarray, roll_rad: np.ndarray,
                  rear_angle_rad: np.ndarray, period_s: float, angle_limit_rad: float,
-                 rate_limit_radps: float,
-                 spin_sideslip_rad: float = SPIN_SIDESLIP_RAD) -> RunExtremes:
+                 rate_limit_radps: float, limits: VehicleLimits = DEFAULT_LIMITS,
+                 speed_mps: np.ndarray | None = None) -> RunExtremes:
     """Peaks and actuator limits of a run sampled once per control tick.
 
     Parameters
@@ -79,8 +76,11 @@ def run_extremes(time_s: np.ndarray, sideslip_rad: np.ndarray, yaw_rate_radps: n
         Control period, s: each tick holds its angle this long.
     angle_limit_rad, rate_limit_radps : float
         The actuator's limits (rad, rad/s).
-    spin_sideslip_rad : float
-        Spin threshold, rad.
+    limits : VehicleLimits
+        The run's limits (its maneuver's): the car spun at the first sample whose sideslip
+        or forward speed breaks them.
+    speed_mps : ndarray, optional
+        Forward speed at the state times, m/s (None: reversing is not checked).
     """
     t = np.asarray(time_s, dtype=float)
     beta = np.asarray(sideslip_rad, dtype=float)
@@ -88,14 +88,14 @@ def run_extremes(time_s: np.ndarray, sideslip_rad: np.ndarray, yaw_rate_radps: n
     at_angle = np.abs(rear) >= angle_limit_rad * (1.0 - LIMIT_RTOL)
     moves = np.abs(np.diff(np.concatenate([[0.0], rear])))  # the actuator starts at 0
     at_rate = moves >= rate_limit_radps * period_s * (1.0 - LIMIT_RTOL)
-    spun = np.nonzero(np.abs(beta) > spin_sideslip_rad)[0]
+    spun = limits.first_violation(t, beta, speed_mps)  # roll is the model's range, no spin
     return RunExtremes(
         _peak(beta), _peak(np.asarray(yaw_rate_radps, dtype=float)),
         _peak(np.asarray(lateral_accel_mps2, dtype=float)),
         _peak(np.asarray(roll_rad, dtype=float)),
         float(np.count_nonzero(at_angle)) * period_s,
         float(np.count_nonzero(at_rate)) * period_s,
-        float(t[spun[0]]) if spun.size else None)
+        spun.time_s if spun is not None else None)
 
 
-__all__ = ["LIMIT_RTOL", "RunExtremes", "SPIN_SIDESLIP_RAD", "run_extremes"]
+__all__ = ["LIMIT_RTOL", "RunExtremes", "run_extremes"]

@@ -31,8 +31,8 @@ from fourws_analysis.report_standards import (law_verdicts, plot_free_steer,
                                               plot_sine_with_dwell, standards_tables,
                                               verdict_items)
 from fourws_analysis.report_texts import (MODEL_NAMES, car_notes, identification_notes,
-                                          law_groups, reading_notes, run_label, run_step_title,
-                                          spike_notes, stability_notes)
+                                          law_groups, limit_notes, reading_notes, run_label,
+                                          run_step_title, spike_notes, stability_notes)
 
 Progress = Callable[[str], None]
 
@@ -289,7 +289,7 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>fourws analysis</title>"
              f"<style>{_CSS}</style></head><body><h1>fourws: analysis of "
              f"{len(runs)} recorded run(s)</h1>"]
-    first = car_notes(runs) + spike_notes(runs)
+    first = limit_notes(runs) + car_notes(runs) + spike_notes(runs)
     if first:  # what the car is and what a number is not, before any number
         parts.append("<h2>The car and the runs</h2>" + _list_html(first, "reading"))
     if runs:

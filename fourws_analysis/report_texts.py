@@ -116,6 +116,15 @@ def spike_notes(runs: Sequence[RunAnalysis]) -> list[str]:
     return out
 
 
+def limit_notes(runs: Sequence[RunAnalysis]) -> list[str]:
+    """One sentence per run whose car broke its vehicle limits (it spun, drove backwards or
+    left the model's range), with when and why; its handling metrics are not computed."""
+    return [f"{run_label(r)}: {r.vehicle_breach.reason} -- the run ended "
+            f"{r.vehicle_breach.kind} at t = {r.vehicle_breach.time_s:.2f} s; its handling "
+            "metrics (ISO 7401, ISO 4138, ISO 3888-2, frequency response) are not computed."
+            for r in runs if r.vehicle_breach is not None]
+
+
 def run_label(r: RunAnalysis) -> str:
     """Legend label of a run: its name, with the law added when the name does not hold it
     (``fws``, not ``fws (fws)``; ``step (sol1)``)."""
@@ -358,4 +367,4 @@ def identification_notes(runs: Sequence[RunAnalysis]) -> list[str]:
 
 
 __all__ = ["MODEL_NAMES", "UNSTABLE_REAL_PER_S", "common_ratio", "identification_notes",
-           "law_groups", "reading_notes", "run_label", "stability_notes"]
+           "law_groups", "limit_notes", "reading_notes", "run_label", "stability_notes"]

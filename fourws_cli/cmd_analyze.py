@@ -122,7 +122,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _expected(metric: str, r: Any) -> bool:
-    """Metrics a maneuver is not meant to give are not worth a warning line."""
+    """Metrics a maneuver is not meant to give are not worth a warning line (those of a run
+    past its vehicle limits are: the maneuver was meant to give them)."""
+    breach = r.vehicle_breach
+    if breach is not None and breach.reason in r.unavailable.get(metric, ""):
+        return False
     return metric in ("frequency_response", "iso7401_step", "iso4138_steady_state",
                       "iso3888_lane_change")
 
@@ -165,6 +169,11 @@ def summary_lines(r: Any) -> list[str]:
     where = f", {speed:.1f} m/s" if speed else ""
     lines = [f"{r.name}: maneuver {metrics['maneuver']}, law {metrics['law']}{where}, "
              f"recording {metrics['recording']}"]
+    if "vehicle_limits" in metrics:  # before any number: what the numbers are not
+        breach = metrics["vehicle_limits"]
+        lines.append(f"  {breach['kind'].upper()} at t = {breach['time_s']:.2f} s: "
+                     f"{breach['reason']}; its handling metrics (ISO 7401, ISO 4138, "
+                     "ISO 3888-2, frequency response) are not computed")
     for key in ("frequency_response", "iso7401_step", "iso4138_steady_state",
                 "iso3888_lane_change", "identified_modes", *STANDARD_KEYS.values()):
         if key in metrics:

@@ -11,9 +11,14 @@ a plausible wrong number. :class:`VehicleLimits` states the rule once; it is app
   graph run (the maneuver node) and the offline twin end at the same tick, with the maneuver
   end ``spun`` or ``diverged`` (run outcome ``spun``/``diverged``, exit code 3, a complete
   bag);
-* to a recorded time history by :func:`first_violation` (a study's compiled loop, a bag in
-  ``fourws analyze``): the first sample that breaks the rule, the same predicate on the same
-  per-tick values.
+* on every state of a study's compiled closed loop (:mod:`fourws_study.loop_kernels`), which
+  ends its run at the same tick as the twin;
+* to a recorded time history by :meth:`VehicleLimits.first_violation` (a study point's status,
+  a bag in ``fourws analyze``): the first sample that breaks the rule.
+
+The predicate is written once, :func:`breach_code`: a plain function of numbers that the
+per-state check, the time-history check (on numpy arrays) and the compiled loop (numba
+compiles it, with the limits passed in as numbers) all call.
 
 The limits (maneuver or scenario key ``vehicle_limits``; each may be lifted by a larger value):
 
@@ -48,6 +53,48 @@ from fourws_sim.params import _from_mapping, _spec
 SPUN = "spun"
 #: Maneuver end of a run whose car left the states the model represents.
 DIVERGED = "diverged"
+
+#: Codes of :func:`breach_code`: no limit broken; |sideslip|, forward speed or |roll| beyond
+#: its limit (the first of roll, sideslip, speed that is broken).
+NO_BREACH, SIDESLIP_BREACH, REVERSING_BREACH, ROLL_BREACH = range(4)
+#: The maneuver end of each breach code.
+BREACH_KINDS = {SIDESLIP_BREACH: SPUN, REVERSING_BREACH: SPUN, ROLL_BREACH: DIVERGED}
+
+
+def breach_code(sideslip_rad, speed_mps, roll_rad,  # type: ignore[no-untyped-def]
+                max_sideslip_rad, min_forward_speed_mps, max_roll_rad):
+    """The rule of :class:`VehicleLimits` on one state: :data:`ROLL_BREACH` if
+    ``|roll| > max_roll_rad``, else :data:`SIDESLIP_BREACH` if ``|sideslip| >
+    max_sideslip_rad``, else :data:`REVERSING_BREACH` if ``speed < min_forward_speed_mps``,
+    else :data:`NO_BREACH`.
+
+    Parameters
+    ----------
+    sideslip_rad, speed_mps, roll_rad : float or numpy.ndarray
+        Body sideslip (rad), forward speed (m/s) and roll (rad); NaN breaks no limit (an
+        absent channel is passed as NaN).
+    max_sideslip_rad, min_forward_speed_mps, max_roll_rad : float
+        The limits (the :class:`VehicleLimits` fields).
+
+    Returns
+    -------
+    int or numpy.ndarray of int
+        The code, element by element for arrays.
+
+    Written as arithmetic on the comparisons, without branches, so that the same function
+    serves numbers (the per-state check), numpy arrays (a time history) and the compiled
+    closed loop (numba compiles it as a plain function).
+    """
+    rolled = 1 * (abs(roll_rad) > max_roll_rad)
+    slid = 1 * (abs(sideslip_rad) > max_sideslip_rad)
+    reversing = 1 * (speed_mps < min_forward_speed_mps)
+    return rolled * ROLL_BREACH + (1 - rolled) * (
+        slid * SIDESLIP_BREACH + (1 - slid) * reversing * REVERSING_BREACH)
+
+
+def _number(value: Any) -> float:
+    """A channel's value for :func:`breach_code` (None: not checked, NaN)."""
+    return math.nan if value is None else float(value)
 
 
 @dataclass(frozen=True)
@@ -93,44 +140,49 @@ class VehicleLimits:
         return self._breach(t_s, beta, speed, roll)
 
     def _breach(self, t_s: float, beta: Any, speed: Any, roll: Any) -> Violation | None:
-        if roll is not None and abs(roll) > self.max_roll_rad:
-            return Violation(DIVERGED, float(t_s),
-                             f"roll {math.degrees(roll):.1f} deg at t = {t_s:.2f} s is beyond "
-                             f"{math.degrees(self.max_roll_rad):.0f} deg, outside what the "
-                             "model represents")
-        if beta is not None and abs(beta) > self.max_sideslip_rad:
-            return Violation(SPUN, float(t_s),
-                             f"the car spun: |sideslip| {math.degrees(abs(beta)):.1f} deg at "
-                             f"t = {t_s:.2f} s is beyond "
-                             f"{math.degrees(self.max_sideslip_rad):.0f} deg")
-        if speed is not None and speed < self.min_forward_speed_mps:
-            return Violation(SPUN, float(t_s),
-                             f"the car drives backwards: forward speed {speed:.2f} m/s at "
-                             f"t = {t_s:.2f} s is below {self.min_forward_speed_mps:g} m/s")
-        return None
+        beta, speed, roll = _number(beta), _number(speed), _number(roll)
+        return self._described(self.code(beta, speed, roll), t_s, beta, speed, roll)
+
+    def code(self, sideslip_rad: Any, speed_mps: Any, roll_rad: Any) -> Any:
+        """:func:`breach_code` with these limits (numbers or arrays; NaN is not checked)."""
+        return breach_code(sideslip_rad, speed_mps, roll_rad, self.max_sideslip_rad,
+                           self.min_forward_speed_mps, self.max_roll_rad)
+
+    def _described(self, code: int, t_s: float, beta: float, speed: float,
+                   roll: float) -> Violation | None:
+        """The :class:`Violation` of breach ``code`` by the state (beta, speed, roll) at
+        ``t_s``, or None for :data:`NO_BREACH`."""
+        if code == ROLL_BREACH:
+            reason = (f"roll {math.degrees(roll):.1f} deg at t = {t_s:.2f} s is beyond "
+                      f"{math.degrees(self.max_roll_rad):.3g} deg, outside what the model "
+                      "represents")
+        elif code == SIDESLIP_BREACH:
+            reason = (f"the car spun: |sideslip| {math.degrees(abs(beta)):.1f} deg at "
+                      f"t = {t_s:.2f} s is beyond {math.degrees(self.max_sideslip_rad):.3g} "
+                      "deg")
+        elif code == REVERSING_BREACH:
+            reason = (f"the car drives backwards: forward speed {speed:.2f} m/s at "
+                      f"t = {t_s:.2f} s is below {self.min_forward_speed_mps:g} m/s")
+        else:
+            return None
+        return Violation(BREACH_KINDS[code], float(t_s), reason)
 
     def first_violation(self, time_s: Any, sideslip_rad: Any = None, speed_mps: Any = None,
                         roll_rad: Any = None) -> Violation | None:
-        """The first sample of a time history that breaks the rule (the same predicate as
-        :meth:`violation`, sample by sample), or None. Arrays of equal length; a channel
-        given as None is not checked."""
+        """The first sample of a time history that breaks the rule (:func:`breach_code`
+        sample by sample, as :meth:`violation` per state), or None. Arrays of equal length;
+        a channel given as None is not checked."""
         t = np.asarray(time_s, dtype=float)
-        channels = [None if c is None else np.asarray(c, dtype=float)
-                    for c in (sideslip_rad, speed_mps, roll_rad)]
-        bad = np.zeros(t.shape, dtype=bool)
-        beta, speed, roll = channels
-        if beta is not None:
-            bad |= np.abs(beta) > self.max_sideslip_rad
-        if speed is not None:
-            bad |= speed < self.min_forward_speed_mps
-        if roll is not None:
-            bad |= np.abs(roll) > self.max_roll_rad
-        hits = np.flatnonzero(bad)
+        beta, speed, roll = (np.full(t.shape, math.nan) if c is None
+                             else np.asarray(c, dtype=float)
+                             for c in (sideslip_rad, speed_mps, roll_rad))
+        codes = self.code(beta, speed, roll)
+        hits = np.flatnonzero(codes)
         if hits.size == 0:
             return None
         k = int(hits[0])
-        values = [None if c is None else float(c[k]) for c in channels]
-        return self._breach(float(t[k]), *values)
+        return self._described(int(codes[k]), float(t[k]), float(beta[k]), float(speed[k]),
+                               float(roll[k]))
 
     def to_dict(self) -> dict[str, float]:
         """The file layout."""
@@ -158,5 +210,6 @@ def vehicle_limits_from(data: Any, source: str | None, prefix: str = "vehicle_li
     return _from_mapping(VehicleLimits, data, source, prefix, unchecked)
 
 
-__all__ = ["DEFAULT_LIMITS", "DIVERGED", "SPUN", "VehicleLimits", "Violation",
-           "vehicle_limits_from"]
+__all__ = ["BREACH_KINDS", "DEFAULT_LIMITS", "DIVERGED", "NO_BREACH", "REVERSING_BREACH",
+           "ROLL_BREACH", "SIDESLIP_BREACH", "SPUN", "VehicleLimits", "Violation",
+           "breach_code", "vehicle_limits_from"]

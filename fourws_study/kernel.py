@@ -13,8 +13,11 @@ where it can (:func:`fourws_study.point.run_points`):
 
 * the 8-DOF model with the RK4 integrator (the simulator's compiled path);
 * a maneuver whose steering is a function of time and whose driver only holds the initial
-  speed (:data:`TIME_STEERED`); the steering of every tick is taken from the maneuver itself
-  before the call;
+  speed (:data:`TIME_STEERED`, with no end condition of its own); the steering of every tick
+  is taken from the maneuver itself before the call, and the kernel ends the run where the
+  maneuver would, at its duration or at the first state past its
+  :class:`~fourws_sim.outcome.VehicleLimits` (the twin's ``end_reason`` then, from the same
+  :meth:`~fourws_sim.outcome.VehicleLimits.violation` of that state);
 * a registered law whose :class:`~fourws_control.base.GainFunction` is one of the gain
   functions its class declares (:func:`fourws_control.compiled.law_kind`: every law fourws
   ships);
@@ -52,6 +55,7 @@ from fourws_run.ticks import InputLimits, whole_multiple
 from fourws_sim import variants
 from fourws_sim.maneuvers import Maneuver, make_maneuver
 from fourws_sim.models import eightdof
+from fourws_sim.outcome import VehicleLimits
 
 #: Maneuver types whose steering depends on time only and whose driver holds the initial speed
 #: throughout (the compiled path takes them; the others need the interpreted twin).
@@ -247,6 +251,7 @@ class Prepared:
     angle_limit: float
     max_step: float
     abort_reason: str
+    limits: VehicleLimits
     lanes: bool = False
 
 
@@ -273,6 +278,8 @@ def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
     speed = config.maneuver.initial_speed_mps
     x = eightdof.initial_state(p, float(speed))
     man = make_maneuver(config.maneuver, vehicle)
+    if type(man).check_end is not Maneuver.check_end:
+        return f"maneuver type {config.maneuver.type} ends on a condition of its own"
     steering = _steering(man, float(speed), dt, n_step)
     if isinstance(steering, str):
         return steering
@@ -299,6 +306,11 @@ def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
     drv[module.D_TARGET] = speed
     drv[module.D_TORQUE_LIMIT] = limits.torque_limit_nm
     drv[module.D_REAR_LIMIT] = limits.rear_angle_limit_rad
+    # the limits Maneuver.done applies to every state (the maneuver's own object)
+    vehicle_limits = man.spec.vehicle_limits
+    drv[module.D_MAX_SIDESLIP] = vehicle_limits.max_sideslip_rad
+    drv[module.D_MIN_SPEED] = vehicle_limits.min_forward_speed_mps
+    drv[module.D_MAX_ROLL] = vehicle_limits.max_roll_rad
     actuator = RearSteerActuator(config.belief)
     gains = law.gain_function()
     assert gains is not None
@@ -313,14 +325,17 @@ def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
                     np.ascontiguousarray(gains.params, dtype=np.float64),
                     float(law.min_speed_mps), float(actuator.angle_limit_rad),
                     float(actuator.rate_limit_rad_per_s * float(period)),
-                    man.abort_reason or DURATION, lanes)
+                    man.abort_reason or DURATION, vehicle_limits, lanes)
 
 
 def _record(prep: Prepared, code: int, out: np.ndarray, loop_seconds: float
             ) -> LoopRecord | str:
-    """The record of one compiled run (``out``: its rows), or why the twin must run it."""
+    """The record of one compiled run (``out``: its rows, the last the state it ended at),
+    or why the twin must run it."""
     module = prep.module
-    if code != module.DONE:
+    if code == module.LIMITS and out.shape[0] == 1:
+        return "the car is past its vehicle limits at the first state"  # the twin refuses it
+    if code not in (module.DONE, module.LIMITS):
         return {module.DIVERGED: "the simulation diverged",
                 module.DRIVER_REFUSED: "a driver input the simulator refuses",
                 module.LAW_FAILED: "the law failed",
@@ -328,7 +343,12 @@ def _record(prep: Prepared, code: int, out: np.ndarray, loop_seconds: float
     channels = {name: out[:-1, i].copy() for i, name in enumerate(module.CHANNELS)}
     final = {name: float(out[-1, i]) for i, name in enumerate(module.CHANNELS)
              if name in module.STATE_CHANNELS}
-    return LoopRecord(channels["sim_time_s"], channels, prep.abort_reason, "compiled",
+    reason = prep.abort_reason
+    if code == module.LIMITS:  # the maneuver's end reason, as Maneuver.done gives it
+        breach = prep.limits.violation(final["sim_time_s"], final)
+        assert breach is not None, final
+        reason = breach.reason
+    return LoopRecord(channels["sim_time_s"], channels, reason, "compiled",
                       final=final, loop_seconds=loop_seconds)
 
 
@@ -390,7 +410,7 @@ def _run_group(block: list[Prepared], lanes: bool) -> list[LoopRecord | str]:
         np.array([p.max_step for p in block]), out, codes, ticks)
     seconds = time.perf_counter() - t0
     total = max(int(n_ticks.sum()), 1)
-    return [_record(p, int(codes[j]), out[j, :int(n_ticks[j]) + 1],
+    return [_record(p, int(codes[j]), out[j, :int(ticks[j]) + 1],
                     seconds * int(n_ticks[j]) / total) for j, p in enumerate(block)]
 
 

@@ -19,8 +19,12 @@ holds the speed: the tick's outputs (the 8-DOF right-hand side with the held inp
 (:attr:`fourws_sim.models.eightdof.Kernels.rk4`). Those functions are the ones the
 interpreted twin calls, so the kernel performs the twin's float operations in the twin's
 order; the steering angles of each tick are the maneuver's own, computed before the call.
-What only the interpreted twin decides -- a refused input, a law that fails, a diverging
-state -- ends a point with a code, and the point is run again by the twin, which says why.
+The maneuver's :class:`~fourws_sim.outcome.VehicleLimits` are checked on every state before
+it is answered, as ``Maneuver.done`` does (:func:`fourws_sim.outcome.breach_code` with the
+limits as numbers, slots ``D_MAX_SIDESLIP`` ... of ``drv``): a state that breaks them ends the
+run there, as the state after the last tick (code ``LIMITS``). What only the interpreted twin
+decides -- a refused input, a law that fails, a diverging state -- ends a point with a code,
+and the point is run again by the twin, which says why.
 
 A tick (:func:`_respond`, :func:`_state_row`, :func:`_no_commands`) is written once; the
 memory layout of the states makes the two kernels, both over a block of points:
@@ -40,8 +44,10 @@ from fourws_control.base import actuator_step, gain_speed, rear_angle_of
 from fourws_sim import drivers, variants
 from fourws_sim.drivers import speed_hold_request, split_brake_torque
 from fourws_sim.lanes import LANES
+from fourws_sim import outcome
 from fourws_sim.models.eightdof import (INPUT, N_AUX, N_INPUT, N_STATE, STATE, aux_from_array,
                                         kernel_module, kernels_for, lane_kernels_for)
+from fourws_sim.outcome import NO_BREACH, breach_code
 from fourws_sim.params import GRAVITY_MPS2
 
 #: Tire model of this variant (:func:`fourws_sim.variants.tire_of` its module name).
@@ -54,7 +60,7 @@ _rhs = _KERNELS.rhs
 #: The law's gains by law kind (:func:`fourws_control.compiled.compiled_gains`, which also
 #: lets numba compile the law step's plain functions); the driver's plain functions.
 _law_gains = compiled.compiled_gains()
-variants.register_plain((speed_hold_request, split_brake_torque))
+variants.register_plain((speed_hold_request, split_brake_torque, breach_code))
 
 #: Recorded channels, one column each of the kernel's output (SI units; the names of
 #: ``VehicleState`` and of :class:`fourws_analysis.bag.UniformRun`).
@@ -70,14 +76,16 @@ N_CHANNELS = len(CHANNELS)
 #: The channels of the vehicle state (the rest are the answers to it).
 STATE_CHANNELS = CHANNELS[:C_HAND]
 
-#: Slots of the driver parameter vector ``drv``.
+#: Slots of the driver parameter vector ``drv`` (the speed-hold driver, the simulator's input
+#: limits, the maneuver's vehicle limits).
 (D_ENABLED, D_KP, D_KI, D_MAX_DECEL, D_MAX_ACCEL, D_MASS, D_RADIUS, D_ROLLING, D_BRAKE_FRONT,
  D_N_DRIVEN, D_DRIVEN_FL, D_DRIVEN_FR, D_DRIVEN_RL, D_DRIVEN_RR, D_TARGET, D_TORQUE_LIMIT,
- D_REAR_LIMIT) = range(17)
-N_DRIVER = D_REAR_LIMIT + 1
+ D_REAR_LIMIT, D_MAX_SIDESLIP, D_MIN_SPEED, D_MAX_ROLL) = range(20)
+N_DRIVER = D_MAX_ROLL + 1
 
-#: Exit codes: every tick run, or where the interpreted twin must take over.
-DONE, DIVERGED, DRIVER_REFUSED, LAW_FAILED, COMMAND_REFUSED = range(5)
+#: Exit codes: every tick run; the run ended at a state past the maneuver's vehicle limits
+#: (its last row is that state); or where the interpreted twin must take over.
+DONE, LIMITS, DIVERGED, DRIVER_REFUSED, LAW_FAILED, COMMAND_REFUSED = range(6)
 
 i_u, i_v, i_r, i_phi, i_p = (int(STATE.U), int(STATE.V), int(STATE.R), int(STATE.PHI),
                              int(STATE.P))
@@ -201,6 +209,13 @@ def _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv,  # type: ignore
     return DONE
 
 
+def _past_limits(row, drv):  # type: ignore[no-untyped-def]
+    """The state of ``row`` breaks the maneuver's vehicle limits (``Maneuver.done``: the
+    run ends at it)."""
+    return breach_code(row[C_BETA], row[C_U], row[C_PHI], drv[D_MAX_SIDESLIP],
+                       drv[D_MIN_SPEED], drv[D_MAX_ROLL]) != NO_BREACH
+
+
 def _no_commands(row):  # type: ignore[no-untyped-def]
     """The final row (the state after the last tick, which the simulator publishes last and
     the maneuver answers as done) has no answers: its command columns are NaN."""
@@ -236,12 +251,15 @@ def _run_point(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-un
         control period (rad).
     out : float64 array (n_ticks + 1, N_CHANNELS)
         Filled tick by tick with :data:`CHANNELS`; the last row holds the state after the
-        last tick (its command columns NaN).
+        last tick (its command columns NaN); with ``LIMITS``, row ``k`` (the ticks recorded)
+        is the state past the limits, its command columns NaN, and the rows after it are
+        not written.
 
     Returns
     -------
     (int, int)
-        Exit code (``DONE`` or why the twin must take over) and the ticks recorded.
+        Exit code (``DONE``, ``LIMITS`` or why the twin must take over) and the ticks
+        recorded.
     """
     n_ticks = out.shape[0] - 1
     u = np.zeros(N_INPUT)
@@ -257,6 +275,9 @@ def _run_point(x, q, cf, cr, dt, n_step, hand, front, drv,  # type: ignore[no-un
         if k == n_ticks:  # the state after the last tick
             _no_commands(out[k])
             break
+        if _past_limits(out[k], drv):  # the maneuver is done at this state
+            _no_commands(out[k])
+            return LIMITS, k
         code = _respond(x, u, k, dt, n_step, out[k], hand[k], front[k], drv, law_kind,
                         law_params, min_speed, angle_limit, max_step, carry, drive, brake,
                         k_gain)
@@ -376,6 +397,12 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
                     ticks[b] = k
                     running[j] = 0
                     continue
+                if _past_limits(row, drv[b]):  # the maneuver is done at this state
+                    _no_commands(row)
+                    codes[b] = LIMITS
+                    ticks[b] = k
+                    running[j] = 0
+                    continue
                 code = _respond(xj, ul[j], k, dt, n_step, row, hand[b, k], front[b, k],
                                 drv[b], law_kind[b], law_flat[law_start[b]:law_start[b + 1]],
                                 min_speed[b], angle_limit[b], max_step[b], carry[j], drive,
@@ -408,8 +435,9 @@ def closed_loop_lanes(x, q, cf, cr, dt, n_step, hand, front,  # type: ignore
 #: reassociation, so the compiled arithmetic is the interpreted one).
 JIT_OPTIONS = dict(compiled.JIT_OPTIONS)
 #: What this variant compiles in besides this file: the laws (their modules, the registry's
-#: order of the kinds, the law step), the driver, and the 8-DOF kernels of the tire.
-VARIANT = variants.Variant(__file__, TIRE_NAME, (*compiled.source_modules(), drivers),
+#: order of the kinds, the law step), the driver, the vehicle-limits rule, and the 8-DOF
+#: kernels of the tire.
+VARIANT = variants.Variant(__file__, TIRE_NAME, (*compiled.source_modules(), drivers, outcome),
                            JIT_OPTIONS, depends=(kernel_module(TIRE_NAME).VARIANT,))
 
 _gains = VARIANT.inline(_gains)
@@ -417,6 +445,7 @@ _outputs = VARIANT.inline(_outputs)
 _state_row = VARIANT.inline(_state_row)
 _respond = VARIANT.inline(_respond)
 _no_commands = VARIANT.inline(_no_commands)
+_past_limits = VARIANT.inline(_past_limits)
 _run_point = VARIANT.inline(_run_point)
 closed_loop_block = VARIANT.jit(closed_loop_block)
 #: The batch kernel in vector instructions, where the tire has lane kernels.

@@ -12,10 +12,15 @@ A point's row (:func:`run_point`) holds, besides its number, sample, seed and ax
   metric of the analysis, frequency responses included, is also in ``metrics_json``;
 * :class:`fourws_analysis.extremes.RunExtremes`: peak |sideslip|, |yaw rate|, |a_y|, |roll|
   and the time the rear actuator spent at its angle and at its rate limit;
-* ``status``: ``ok``; ``spun`` (|sideslip| beyond the study's ``spin_sideslip_rad``) or
-  ``diverged`` (the state became non-finite), each with ``status_reason`` and
-  ``status_time_s``; or ``error`` with the message (a point that cannot be built or run never
-  stops the study);
+* ``status``: ``ok``; ``spun`` (the car spun or drove backwards) or ``diverged`` (its roll
+  left the model's range, or the state became non-finite), by the run maneuver's
+  :class:`~fourws_sim.outcome.VehicleLimits` -- the rule that ends a graph run and the twin
+  ``spun``/``diverged``, applied to the run's states (:func:`status_of`); each with
+  ``status_reason`` and ``status_time_s``; or ``error`` with the message (a point that cannot
+  be built or run never stops the study). The run itself ends at that state on every path
+  (the compiled loop as the twin), and ``fourws analyze`` reports no ISO metrics of a run
+  past its limits: a spun or diverged point's ``iso7401.*``, ``iso4138.*`` and ``iso3888.*``
+  columns are absent (null in the table; ``metrics_json`` says why under ``unavailable``);
 * the law closed on the 8-DOF linearized at straight running at the point's speed
   (:func:`fourws_analysis.compare.eightdof_linear_system`) and on the matching linear model
   (the 3-DOF when the vehicle has roll data, else the 2-DOF,
@@ -201,28 +206,34 @@ def analysis_metrics(run: UniformRun) -> tuple[dict[str, Any], dict[str, Any]]:
     return flat, everything
 
 
-def status_of(record: LoopRecord, extremes: RunExtremes,
-              spin_sideslip_rad: float) -> tuple[str, str, float | None]:
-    """``(status, reason, time)`` of a run (module docstring)."""
+def status_of(record: LoopRecord, config: RunConfig) -> tuple[str, str, float | None]:
+    """``(status, reason, time)`` of a run (module docstring): ``diverged`` with the twin's
+    reason if the state became non-finite, else the first of its states (the final one
+    included) past the maneuver's vehicle limits
+    (:meth:`fourws_sim.outcome.VehicleLimits.first_violation`: ``spun`` or ``diverged``
+    with its reason and time), else ``ok``."""
     t = record.time_s
     if record.diverged:
         return "diverged", record.end_reason, float(t[-1]) if t.size else None
-    if extremes.spin_time_s is not None:
-        return ("spun", f"|sideslip| {extremes.max_abs_sideslip_rad:.3f} rad exceeds "
-                f"{spin_sideslip_rad:.3f} rad (spun)", extremes.spin_time_s)
+    t_all, ch = _with_final(record)
+    breach = config.maneuver.vehicle_limits.first_violation(
+        t_all, ch["sideslip_rad"], ch["speed_mps"], ch["roll_rad"])
+    if breach is not None:
+        return breach.kind, breach.reason, breach.time_s
     return "ok", "", None
 
 
-def extremes_of(record: LoopRecord, config: RunConfig, spin_sideslip_rad: float) -> RunExtremes:
+def extremes_of(record: LoopRecord, config: RunConfig) -> RunExtremes:
     """:func:`fourws_analysis.extremes.run_extremes` of a run, with its actuator's limits
-    (the controller's, from the belief vehicle)."""
+    (the controller's, from the belief vehicle) and its maneuver's vehicle limits."""
     t, ch = _with_final(record)
     act = RearSteerActuator(config.belief)
     return run_extremes(t, ch["sideslip_rad"], ch["yaw_rate_radps"],
                         ch["lateral_accel_mps2"], ch["roll_rad"],
                         record.channels["rear_command_rad"],
                         float(config.controller_period_s), act.angle_limit_rad,
-                        act.rate_limit_rad_per_s, spin_sideslip_rad)
+                        act.rate_limit_rad_per_s, config.maneuver.vehicle_limits,
+                        ch["speed_mps"])
 
 
 def _modes(eigenvalues: Iterable[complex]) -> np.ndarray:
@@ -295,13 +306,13 @@ def evaluate(row: dict[str, Any], study: Study, config: RunConfig, law: Law,
                end_reason=record.end_reason,
                duration_s=float(record.time_s[-1] - record.time_s[0]),
                vehicle_steps=int(record.time_s.size) * steps)
-    extremes = extremes_of(record, config, study.spin_sideslip_rad)
+    extremes = extremes_of(record, config)
     row.update(extremes.to_dict())
     flat, everything = analysis_metrics(uniform_run(record, config,
                                                     config_dict=config_dict))
     row.update(flat)
     everything["extremes"] = extremes.to_dict()
-    status, reason, at = status_of(record, extremes, study.spin_sideslip_rad)
+    status, reason, at = status_of(record, config)
     row.update(status=status, status_reason=reason, status_time_s=at)
     row.update(linear_stability(config, law))
     row["metrics_json"] = json.dumps(everything, default=_json_default, sort_keys=True)

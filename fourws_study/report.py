@@ -395,6 +395,7 @@ def write_study_report(root: str | Path, study: Study, plots: bool = True) -> Pa
     status = list(_column(table, "status"))
     counts = {s: status.count(s) for s in ("ok", "spun", "diverged", "error")}
     maneuver = study.base.scenario.maneuver.type
+    limits = study.base.scenario.vehicle_limits or study.base.scenario.maneuver.vehicle_limits
     metrics = [m for m in (study.report.metrics or DEFAULT_METRICS.get(maneuver,
                                                                        FALLBACK_METRICS))
                if m in table.column_names]
@@ -410,9 +411,13 @@ def write_study_report(root: str | Path, study: Study, plots: bool = True) -> Pa
              "<h2>How to read it</h2><ul class='reading'>"
              "<li>Each point is one closed-loop run of the offline twin of the lockstep node "
              "graph; its metrics are those of <code>fourws analyze</code>.</li>"
-             f"<li>Status: <b>spun</b> when |sideslip| exceeds {study.spin_sideslip_rad:.3f} "
-             "rad, <b>diverged</b> when the state became non-finite, <b>error</b> when the "
-             "point could not be built or run (the reason is in the table).</li>"
+             f"<li>Status: <b>spun</b> when |sideslip| exceeds "
+             f"{math.degrees(limits.max_sideslip_rad):.0f} deg or the forward speed falls "
+             f"below {limits.min_forward_speed_mps:g} m/s, <b>diverged</b> when |roll| exceeds "
+             f"{math.degrees(limits.max_roll_rad):.0f} deg or the state became non-finite "
+             "(the maneuver's vehicle limits, by which every run ends there; its ISO metrics "
+             "are left empty), <b>error</b> when the point could not be built or run (the "
+             "reason is in the table).</li>"
              "<li>Linear stability: the law (designed on the controller's belief) closed on "
              "the 8-DOF linearized at straight running at the point's speed, and on the "
              "matching linear model (3-DOF with roll data, else 2-DOF), both on the true "

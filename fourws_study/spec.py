@@ -28,8 +28,13 @@ A study file (``config/studies/<name>.yaml``)::
       map_axes: [speed_kmh, belief.cornering_stiffness_scale_front]
       metrics: [max_abs_sideslip_rad, ...]   # numeric result columns (checked)
       worst: {metric: max_abs_sideslip_rad, count: 20}
-    spin_sideslip_rad: 0.349      # optional: |sideslip| above which a run has spun
     block_size: 8                 # optional: points per task
+
+A point is ``spun`` or ``diverged`` by its maneuver's ``vehicle_limits`` (the scenario's or
+the maneuver file's, :class:`fourws_sim.outcome.VehicleLimits`: the rule every run follows;
+an axis ``maneuver.vehicle_limits.max_sideslip_rad`` sweeps it where the base maneuver
+gives ``vehicle_limits``). The former study key ``spin_sideslip_rad`` is refused with that
+advice.
 
 Axis keys (the result table's column names) are field paths of the run:
 
@@ -95,7 +100,11 @@ OPS = ("value", "scale", "shift")
 DISTRIBUTIONS = {"normal": ("mean", "std"), "uniform": ("low", "high"),
                  "lognormal": ("median", "sigma")}
 _FIELDS = ("name", "description", "scenario", "law", "grid", "monte_carlo", "report",
-           "spin_sideslip_rad", "block_size")
+           "block_size")
+#: Study keys that are gone, and what says it now.
+_REPLACED = {"spin_sideslip_rad": "a run spins by its maneuver's vehicle_limits: give "
+                                  "vehicle_limits: {max_sideslip_rad: ...} in the scenario "
+                                  "(or its maneuver)"}
 #: Default points per task: a few seconds of work at the compiled path's speed.
 DEFAULT_BLOCK_SIZE = 16
 
@@ -306,7 +315,6 @@ class Study:
     grid: tuple[Axis, ...]
     monte_carlo: MonteCarlo | None
     report: ReportSpec = field(default_factory=ReportSpec)
-    spin_sideslip_rad: float = math.radians(20.0)
     block_size: int = DEFAULT_BLOCK_SIZE
 
     # ---------------------------------------------------------------- points
@@ -538,6 +546,9 @@ def study_from_mapping(data: Any, source: str = "<study>", text: str = "",
     """Validate a study mapping (see :func:`load_study`)."""
     if not isinstance(data, Mapping):
         raise ParameterError("<root>", "a study file must be a mapping", source)
+    for key, advice in _REPLACED.items():
+        if key in data:
+            raise ParameterError(key, f"no longer a study key: {advice}", source)
     unknown = sorted(set(data) - set(_FIELDS))
     if unknown:
         raise ParameterError(unknown[0], f"unknown field (valid: {', '.join(_FIELDS)})",
@@ -556,18 +567,13 @@ def study_from_mapping(data: Any, source: str = "<study>", text: str = "",
     dup = sorted({k for k in keys if keys.count(k) > 1})
     if dup:
         raise ParameterError(f"grid.{dup[0]}", "given twice (grid and monte_carlo)", source)
-    spin = data.get("spin_sideslip_rad", math.radians(20.0))
-    if isinstance(spin, bool) or not isinstance(spin, (int, float)) \
-            or not 0.0 < spin <= math.pi:
-        raise ParameterError("spin_sideslip_rad", f"must be in (0, pi] rad, got {spin!r}",
-                             source)
     block = data.get("block_size", DEFAULT_BLOCK_SIZE)
     if isinstance(block, bool) or not isinstance(block, int) or block < 1:
         raise ParameterError("block_size", f"must be an integer >= 1, got {block!r}", source)
     study = Study(name=name, description=str(data.get("description", "")), source=source,
                   text=text, base=base, grid=grid, monte_carlo=mc,
                   report=_report(data.get("report"), grid, source),
-                  spin_sideslip_rad=float(spin), block_size=block)
+                  block_size=block)
     _validate_points(study)
     return study
 

@@ -23,7 +23,8 @@ from fourws_analysis import units as U
 from fourws_analysis.compare import RunAnalysis, analyze_run, eightdof_linear_system
 from fourws_analysis.frequency import PHASE_BREAK_DEG
 from fourws_cli.main import main
-from fourws_run.closed_loop import run_scenario
+from fourws_run.closed_loop import run_closed_loop, run_scenario
+from fourws_sim.maneuvers import load_maneuver_spec
 from fourws_sim.params import load_vehicle, vehicle_from_mapping
 from fourws_run.scenario import load_scenario
 
@@ -581,3 +582,49 @@ def test_eigenvalue_sweeps_are_kept_for_the_most_recent_vehicles_only(monkeypatc
     lateral = C._lateral_modes(eightdof_linear_system(cars[0], C.SWEEP_SPEEDS_MPS[0]).poles())
     row = first.eigenvalues[0]
     assert np.array_equal(np.sort_complex(row[~np.isnan(row)]), np.sort_complex(lateral))
+
+
+def test_a_spun_run_is_flagged_and_gives_no_step_metrics(tmp_path: Path, capsys) -> None:
+    """A step steer at 85 m/s (km/h meant; before, ``fourws analyze`` gave a TB factor of
+    367.6 s deg and 'not settled'): the offline twin ends spun at the first state past
+    20 deg of sideslip (fourws_sim.outcome). Its bag -- the answered states and that last
+    one, as the graph records them -- is flagged: metrics.json says spun at the twin's time
+    with the twin's sentence, has no ISO 7401 step metrics and no identified modes (both
+    unavailable with that sentence); the summary says it right after the run's line and
+    prints no metric group; the report says it before any number."""
+    spec = load_maneuver_spec("step_steer_85kmh").to_dict()
+    result = run_closed_loop(load_vehicle("table_8_1"),
+                             {**spec, "initial_speed_mps": 85.0}, "fws")
+    assert result.end_kind == "spun" and result.end_reason.startswith("the car spun")
+    final = result.final_outputs
+    t = np.append(result.time_s, final["sim_time_s"])
+    state = {k: np.concatenate([v, np.asarray(final[k], dtype=float)[None]])
+             for k, v in result.outputs.items()}
+    driver = {k: np.concatenate([v, v[-1:]]) for k, v in result.driver.items()}
+    B.write_run(tmp_path / "spun", t, state, result.config, driver=driver,
+                model=result.model)
+    assert main(["analyze", str(tmp_path / "spun"), "--json", "--quiet", "--no-sweep"]) == 0
+    metrics = json.loads(capsys.readouterr().out)["runs"]["spun"]
+    assert metrics["vehicle_limits"] == {"kind": "spun", "reason": result.end_reason,
+                                         "time_s": pytest.approx(final["sim_time_s"],
+                                                                 abs=1e-9)}
+    assert "iso7401_step" not in metrics and "identified_modes" not in metrics
+    for key in ("iso7401_step", "identified_modes"):
+        assert metrics["unavailable"][key].startswith(result.end_reason + "; the run ended")
+    assert main(["analyze", str(tmp_path / "spun"), "--quiet", "--no-sweep"]) == 0
+    captured = capsys.readouterr()
+    lines = captured.out.splitlines()
+    assert lines[1] == (f"  SPUN at t = {final['sim_time_s']:.2f} s: {result.end_reason}; "
+                        "its handling metrics (ISO 7401, ISO 4138, ISO 3888-2, frequency "
+                        "response) are not computed")
+    assert len(lines) == 2, lines  # no group: no TB factor, peak or overshoot
+    assert f"iso7401_step not computed: {result.end_reason}" in captured.err
+    index = R.write_report([analyze_run(B.resample(B.load_bag(tmp_path / "spun")),
+                                        eig_sweep=False)], tmp_path / "rep", plots=False)
+    html = index.read_text()
+    first = html.index("The car and the runs")
+    assert html.index(result.end_reason, first) < html.index("<h2>Metrics</h2>")
+    # the same run without its last state (no state past the limits) is not flagged
+    B.write_run(tmp_path / "cut", result.time_s, result.outputs, result.config,
+                driver=result.driver, model=result.model)
+    assert B.resample(B.load_bag(tmp_path / "cut")).vehicle_breach is None

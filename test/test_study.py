@@ -14,6 +14,7 @@ ISO 3888-2 course.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import shutil
@@ -37,6 +38,7 @@ from fourws_control import LAWS, compiled
 from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import DoubleLaneChangeParams
+from fourws_sim.outcome import DIVERGED, SPUN
 from fourws_sim.tires import TIRES, get_tire
 from fourws_study.execute import run_study
 from fourws_study.kernel import (build_law, prepare_compiled, run_compiled,
@@ -172,6 +174,62 @@ def test_every_law_and_tire_compiled_equals_the_twin_bit_for_bit(tmp_path, law, 
         assert law == "fws" or np.max(np.abs(twin.rear_angle_rad)) > 1e-4
 
 
+#: A run past each of the vehicle limits (fourws_sim.outcome), on the step: (maneuver
+#: changes, law, the maneuver end, words of its reason). fws at 130 km/h is past table_8_1's
+#: critical speed (test_stability_boundary...) and spins (past 20 deg at 2.2 s, measured with
+#: both tires); at 85 m/s (km/h meant) with a 2.9 deg step and the sideslip limit lifted
+#: the car turns round and drives backwards (at 2.4-2.9 s of 5 s); a roll limit of 0.01 rad
+#: is below the roll of the 1.5 deg step at 85 km/h (passed at 0.67 s).
+LIMIT_CASES = {
+    "sideslip": ({"initial_speed_mps": 130.0 / 3.6}, "fws", SPUN, "the car spun"),
+    "reversing": ({"initial_speed_mps": 85.0, "amplitude_rad": 0.05, "duration_s": 5.0,
+                   "vehicle_limits": {"max_sideslip_rad": 3.1}},
+                  "fws", SPUN, "the car drives backwards"),
+    "roll": ({"vehicle_limits": {"max_roll_rad": 0.01}}, "sol1", DIVERGED, "roll"),
+}
+
+
+@pytest.mark.parametrize("tire", TIRE_CASES)
+@pytest.mark.parametrize("case", LIMIT_CASES)
+def test_a_run_past_its_vehicle_limits_ends_at_the_twins_state_bit_for_bit(tmp_path, case,
+                                                                           tire):
+    """A run whose car breaks one of its maneuver's vehicle limits ends where the twin
+    (Maneuver.done) ends it, at the first state past the limit: the compiled point alone and
+    in a block (in vector instructions where the tire has lane kernels) give
+    run_closed_loop's ticks, channels and final state to the last bit and its end reason
+    word for word, for each limit (sideslip and reversing: spun; roll: diverged)."""
+    changes, law, kind, words = LIMIT_CASES[case]
+    config = _case_config(tmp_path, {**STEP, **changes}, law, {}, tire)
+    built = build_law(config)
+    single = run_compiled(config, built)
+    prep = prepare_compiled(config, built)
+    assert not isinstance(single, str) and not isinstance(prep, str), (single, prep)
+    (block,) = run_compiled_block([prep])
+    twin = run_closed_loop(config.vehicle, config.maneuver, config.law, model=config.model,
+                           dt_s=config.integration_step_s,
+                           control_period_s=config.control_period_s,
+                           belief_vehicle=config.belief, integrator=config.integrator,
+                           law_options=config.law_options, tire=config.tire)
+    assert twin.end_kind == kind and words in twin.end_reason, twin.end_reason
+    # it ended early, before the maneuver's last tick
+    full = round(config.maneuver.duration_s / config.control_period_s)
+    assert 0 < twin.time_s.size < full
+    assert single.end_reason == block.end_reason == twin.end_reason
+    assert single.time_s.tobytes() == twin.time_s.tobytes()
+    for name, values in single.channels.items():
+        want = TWIN_CHANNELS[name](twin) if name in TWIN_CHANNELS else twin[name]
+        assert values.tobytes() == want.tobytes(), name
+        assert block.channels[name].tobytes() == values.tobytes(), name
+    assert single.final == block.final == {
+        name: float(twin.final_outputs[name]) for name in single.final}
+    # the final state is the first past the limit: every answered state is within it
+    limits = config.maneuver.vehicle_limits
+    assert limits.first_violation(twin.time_s, twin["sideslip_rad"], twin["speed_mps"],
+                                  twin["roll_rad"]) is None
+    breach = limits.violation(single.final["sim_time_s"], single.final)
+    assert breach is not None and breach.kind == kind
+
+
 def test_batch_kernel_equals_the_single_run_kernel_bit_for_bit(tmp_path):
     """One call of the batch kernel over a block mixing laws with gain functions of different
     parameter counts (closed form, 3-DOF fit, LQR table), speeds, a spinning point and two
@@ -233,9 +291,28 @@ def test_study_rows_do_not_depend_on_the_path(tmp_path):
             assert a[key] == b[key] or (a[key] != a[key] and b[key] != b[key]), key
         rows[(a["law"], a["speed_kmh"])] = a
     # fws at 130 km/h is past table_8_1's critical speed: the point spins (its status says
-    # so) and the study goes on
-    assert rows[("fws", 130.0)]["status"] == "spun"
+    # so, by the maneuver's vehicle limits, at the state its run ended at) and the study
+    # goes on
+    spun = rows[("fws", 130.0)]
+    assert spun["status"] == "spun" and spun["status_reason"] == spun["end_reason"]
+    assert spun["status_reason"].startswith("the car spun: |sideslip|")
+    assert f"t = {spun['status_time_s']:.2f} s" in spun["status_reason"]
+    assert spun["spin_time_s"] == spun["status_time_s"]
+    assert spun["status_time_s"] == pytest.approx(spun["duration_s"] + 0.01, abs=1e-9)
     assert rows[("fws", 60.0)]["status"] == rows[("rwc2_3dof", 130.0)]["status"] == "ok"
+    # the spun run's ISO 7401 metrics are not reported (absent: null in the table), and its
+    # metrics say why; an ok run has them
+    iso = [k for k in rows[("fws", 60.0)] if k.startswith("iso7401.")]
+    assert len(iso) > 10 and all(rows[("fws", 60.0)][k] is not None for k in
+                                 ("iso7401.yaw_rate_radps.steady_state_radps",
+                                  "iso7401.yaw_rate_radps.response_time_s"))
+    assert not any(k.startswith("iso7401.") for k in spun)
+    everything = json.loads(spun["metrics_json"])
+    assert everything["vehicle_limits"]["kind"] == "spun"
+    # (the analysis reads the states stamped to the ns, as a bag holds them)
+    assert everything["vehicle_limits"]["time_s"] == pytest.approx(spun["status_time_s"],
+                                                                   abs=1e-9)
+    assert spun["status_reason"] in everything["unavailable"]["iso7401_step"]
     lane = load_study(_write(tmp_path, "lane", {"scenario": "lane_change", "law": "sol1"}))
     config = lane.config(lane.point(0))
     assert isinstance(run_compiled(config, law_for(config)), str)
@@ -517,6 +594,8 @@ BAD = [
     ({"grid": {"vehicle.chassis.mass_kg": {"shift": [10.0]}}, "grids": {}}, "grids"),
     ({"monte_carlo": {"samples": 1_000_001, "fields": {"vehicle.chassis.mass_kg": {
         "distribution": "uniform", "low": 1200.0, "high": 1400.0}}}}, "--force"),
+    # the study's own spin threshold is gone: the maneuver's vehicle limits are the rule
+    ({"spin_sideslip_rad": 0.3}, "vehicle_limits: {max_sideslip_rad"),
 ]
 
 

@@ -18,7 +18,8 @@ from fourws_run.scenario import load_scenario, scenario_from_mapping
 from fourws_run.verdict import ManeuverReport, SimReport, conclude
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import load_maneuver_spec, maneuver_spec_from_mapping
-from fourws_sim.outcome import DEFAULT_LIMITS, DIVERGED, SPUN, VehicleLimits
+from fourws_sim.outcome import (DEFAULT_LIMITS, DIVERGED, NO_BREACH, REVERSING_BREACH,
+                                ROLL_BREACH, SIDESLIP_BREACH, SPUN, VehicleLimits, breach_code)
 from fourws_sim.params import load_vehicle
 
 DEG = math.pi / 180.0
@@ -40,6 +41,28 @@ def test_the_rule_on_single_states(state, kind):
     assert (found.kind if found else None) == kind
     if found:
         assert found.time_s == 1.25 and "t = 1.25 s" in found.reason
+
+
+def test_breach_code_is_one_rule_for_numbers_arrays_and_compiled_code():
+    """The predicate of VehicleLimits (breach_code) gives each hand-made state the code of the
+    module docstring's order (roll first, then sideslip, then reversing), as a number, element
+    by element on arrays (the time-history form) and compiled by numba as the study's loop
+    compiles it: states on both sides of each default limit, NaN (not checked) and states
+    past two limits."""
+    import numba  # the compiled form only
+
+    cases = [((19.9 * DEG, 20.0, 0.05), NO_BREACH), ((-20.1 * DEG, 20.0, 0.0), SIDESLIP_BREACH),
+             ((0.0, -0.51, 0.0), REVERSING_BREACH), ((0.0, -0.49, 0.0), NO_BREACH),
+             ((0.0, 20.0, -30.1 * DEG), ROLL_BREACH), ((math.nan,) * 3, NO_BREACH),
+             ((25 * DEG, -1.0, 31 * DEG), ROLL_BREACH), ((25 * DEG, -1.0, 0.0), SIDESLIP_BREACH)]
+    limits = (DEFAULT_LIMITS.max_sideslip_rad, DEFAULT_LIMITS.min_forward_speed_mps,
+              DEFAULT_LIMITS.max_roll_rad)
+    assert limits == (20 * DEG, -0.5, 30 * DEG)
+    compiled = numba.njit(breach_code)
+    for state, code in cases:
+        assert breach_code(*state, *limits) == compiled(*state, *limits) == code, state
+    arrays = [np.array(column) for column in zip(*(state for state, _ in cases))]
+    assert breach_code(*arrays, *limits).tolist() == [code for _, code in cases]
 
 
 def test_first_violation_is_the_per_state_rule_sample_by_sample():
