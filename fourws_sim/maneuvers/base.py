@@ -23,7 +23,7 @@ from fourws_sim.drivers import Path as ReferencePath
 from fourws_sim.drivers import (DriverCommand, PathDriverSpec, SpeedHoldDriver, SpeedHoldSpec,
                                 TrackingDriverSpec)
 from fourws_sim.errors import ParameterError, describe
-from fourws_sim.outcome import DEFAULT_LIMITS, SPUN, VehicleLimits
+from fourws_sim.outcome import DEFAULT_LIMITS, VehicleLimits
 from fourws_sim.params import UNCHECKED_KEY, Vehicle, check_plausible
 
 STEER_INPUTS = ("road_wheel", "steering_wheel")
@@ -273,12 +273,18 @@ class Maneuver:
 
     def end_at_limits(self, outputs: Mapping[str, Any], max_lateral_accel_mps2: float,
                       max_sideslip_rad: float) -> None:
-        """The end of a slowly increasing steer: the lateral-acceleration limit reached (the
-        designed end condition), or the sideslip past its limit (an abort: the car spins)."""
+        """The end of a slowly increasing steer: the lateral-acceleration limit reached, or
+        the sideslip past the maneuver's own limit (the car leaves steady-state cornering).
+        Both are the designed end of the test, whose record up to there is valid: whether the
+        car *spun* is decided by one rule only, the run's
+        :class:`~fourws_sim.outcome.VehicleLimits` (20 deg by default, beyond the 0.15 rad
+        these maneuvers stop at)."""
         if abs(float(outputs["lateral_accel_mps2"])) >= max_lateral_accel_mps2:
             self.end("lateral acceleration limit reached", end_condition=True)
         elif abs(float(outputs.get("sideslip_rad", 0.0))) > max_sideslip_rad:
-            self.end("sideslip limit reached (the car spins)", kind=SPUN)
+            self.end(f"the maneuver's sideslip limit reached (|sideslip| > "
+                     f"{math.degrees(max_sideslip_rad):.3g} deg: the car leaves steady-state "
+                     "cornering)", end_condition=True)
 
     def done(self, t: float, outputs: Mapping[str, Any] | None = None) -> bool:
         """True once the run may end: duration reached, an end condition of the type, or the

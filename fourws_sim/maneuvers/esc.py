@@ -184,8 +184,9 @@ class SlowlyIncreasingSteerParams:
     """FMVSS No. 126 S7.6 slowly increasing steer (module docstring): from ``start_s`` the
     steering-wheel angle grows at ``rate_radps`` (13.5 deg/s) in ``direction`` (``left`` or
     ``right``) up to ``max_steering_wheel_rad``; the run ends when ``|a_y|`` reaches
-    ``max_lateral_accel_mps2`` (0.5 g, the designed end), or aborts when the sideslip exceeds
-    ``max_sideslip_rad`` (the car spins)."""
+    ``max_lateral_accel_mps2`` (0.5 g, the designed end), or when the sideslip exceeds
+    ``max_sideslip_rad`` (it leaves steady-state cornering; whether it spun is the run's
+    vehicle limits' call)."""
 
     rate_radps: float = _spec(default=SIS_RATE_RADPS, bounds=RATE_BOUNDS_RADPS)
     direction: str = "left"

@@ -176,7 +176,8 @@ class SlowRampSteerParams(RampSteerParams):
     """ISO 4138 constant-speed method: steer increased slowly (default rate well under the
     standard's quasi-steady limit) at constant speed; the run ends when
     ``|a_y| >= max_lateral_accel_mps2``, when ``|sideslip| > max_sideslip_rad`` (the car left
-    the quasi-steady regime: it is spinning), or at ``duration_s``."""
+    the quasi-steady regime; whether it spun is the run's vehicle limits' call), or at
+    ``duration_s``."""
 
     # end conditions: any small threshold is meaningful (it ends the run early on purpose)
     max_lateral_accel_mps2: float = _spec(default=8.0, bounds=(0.0, 30.0))
