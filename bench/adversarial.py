@@ -490,19 +490,51 @@ class Bag:
         return {t: len(m) for t, m in sorted(self.messages.items())}
 
 
+class _CdrDecoders:
+    """Decoders of a bag's ros2msg schemas built from the definitions the bag embeds (rosbags'
+    type system, not fourws's message classes: the harness reads the bag as an outside
+    tool would)."""
+
+    def __init__(self) -> None:
+        from rosbags.typesys import Stores, get_typestore
+
+        self.store = get_typestore(Stores.EMPTY)
+
+    def decoder_for(self, encoding: str, schema: Any) -> Any:
+        from rosbags.typesys import get_types_from_msg
+
+        if encoding != "cdr" or schema.encoding != "ros2msg":
+            raise ValueError(f"cannot decode {encoding}/{schema.encoding}")
+        text = schema.data.decode()
+        types: dict[str, Any] = {}
+        name, body = schema.name, []
+        for line in text.splitlines():
+            if line.startswith("=" * 10):
+                types.update(get_types_from_msg("\n".join(body), name))
+                name, body = "", []
+            elif line.startswith("MSG: ") and not name:
+                name = line[5:].strip()
+            else:
+                body.append(line)
+        types.update(get_types_from_msg("\n".join(body), name))
+        self.store.register({k: v for k, v in types.items() if k not in self.store.fielddefs})
+        msgtype = schema.name if "/msg/" in schema.name else schema.name.replace("/", "/msg/")
+        store = self.store
+        return lambda data: store.deserialize_cdr(data, msgtype)
+
+
 def read_bag(path: Path | None) -> Bag:
     """Every message of the bag's ``.mcap`` files up to the first damaged record; whether
     ``metadata.yaml`` exists and rosbags opens the bag."""
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
-    from mcap_ros2.decoder import DecoderFactory
 
     bag = Bag(path if path is not None else Path("-"))
     if path is None or not path.is_dir():
         return bag
     bag.exists = True
     bag.metadata = (path / "metadata.yaml").is_file()
-    factory = DecoderFactory()
+    factory = _CdrDecoders()
     for file in sorted(path.glob("*.mcap")):
         schemas: dict[int, Any] = {}
         channels: dict[int, Any] = {}
