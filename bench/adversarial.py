@@ -748,7 +748,7 @@ def judge(work: Work, run: Run, expect: Expect, name: str, group: str, how: str,
         res.notes.append(f"node processes alive {ORPHAN_GRACE_S:.0f} s after the launcher "
                          f"ended: {sorted(left)}")
     run.kill_leftovers()
-    says_ok = bool(re.search(r"^run \S+: ok$", stdout, re.M))
+    says_ok = bool(re.search(r"^run \S+: ok( \(.*\))?$", stdout, re.M))  # ok, or ok (a note)
     errors = _error_lines(stdout, stderr)
     res.error = errors[-1] if errors else ""
     twin = work.twin(expect.scenario)
