@@ -119,10 +119,6 @@ def prepare_run_dir(out_dir: Path, run_name: str, overwrite: bool) -> Path:
     return run_dir
 
 
-#: Domain leases of runs whose launcher participant could not be closed (kept until exit).
-_HELD_LEASES: list[Any] = []
-
-
 def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
               overwrite: bool = False, echo: Callable[[str], None] | None = None,
               replay_driver_from: Path | None = None,
@@ -220,13 +216,10 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         finally:
             failure = _finish(config, group, ros, state, interrupt, failure, bag_path, names,
                               echo)
-            if ros is not None and not ros.close():
-                # stuck in Fast DDS (launcher_node.CLOSE_TIMEOUT_S): the domain stays held by
-                # this process, so a next run does not meet the stuck participant
-                echo("  note: the launcher's ROS participant did not close within "
-                     f"{CLOSE_TIMEOUT_S:.0f} s (a Fast DDS teardown deadlock); left open, "
-                     f"ROS domain {lease.domain_id} held until this process exits")
-                _HELD_LEASES.append(lease)
+            if ros is not None and not ros.close(keep=lease):  # stuck: the lease is kept
+                echo(f"  note: the launcher's ROS participant did not close within "
+                     f"{CLOSE_TIMEOUT_S:.0f} s (a Fast DDS deadlock); domain {lease.domain_id} "
+                     "held until this process exits")
             else:
                 lease.release()
         record.exit_codes = group.exit_codes()

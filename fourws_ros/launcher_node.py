@@ -42,10 +42,10 @@ _KEPT_LEVELS = (Log.WARN, Log.ERROR, Log.FATAL)
 #: ever (seen as a run whose recorder was killed ended). The run's outcome is known by
 #: then; the teardown is left to its thread.
 CLOSE_TIMEOUT_S = 10.0
-#: Launcher nodes whose close did not end (their participants are stuck in Fast DDS): kept
-#: alive, never destroyed; a process holding one leaves with ``os._exit`` (exiting normally
-#: would destroy the stuck participant again and hang).
-ABANDONED: list["LauncherNode"] = []
+#: Launcher nodes whose close did not end (their participants are stuck in Fast DDS), each
+#: with what it keeps held: kept alive, never destroyed; a process holding one leaves with
+#: ``os._exit`` (exiting normally would destroy the stuck participant again and hang).
+ABANDONED: list[tuple["LauncherNode", Any]] = []
 
 
 @dataclass
@@ -217,10 +217,11 @@ class LauncherNode:
         self.executor.spin_until_future_complete(future, timeout_sec=10.0)
         return future.done()
 
-    def close(self) -> bool:
+    def close(self, keep: Any = None) -> bool:
         """Destroy the node and its context; False if that did not end within
-        :data:`CLOSE_TIMEOUT_S` (the participant is then left as it is, see
-        :data:`ABANDONED`)."""
+        :data:`CLOSE_TIMEOUT_S`: the participant is then left as it is, kept in
+        :data:`ABANDONED` with ``keep`` (the run's domain lease: a next run in this process must
+        not meet the stuck participant)."""
         done = threading.Event()
 
         def teardown() -> None:
@@ -233,7 +234,7 @@ class LauncherNode:
         thread.start()
         if done.wait(CLOSE_TIMEOUT_S):
             return True
-        ABANDONED.append(self)
+        ABANDONED.append((self, keep))
         return False
 
 

@@ -1,0 +1,66 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
+"""A launcher participant that cannot be closed (Fast DDS 3.2 can deadlock destroying a
+publisher, eProsima/Fast-DDS#6502) costs a bounded wait, is kept, never destroyed, with the
+run's domain lease, and the process leaves with its exit code instead of hanging at exit."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+import types
+
+from fourws_ros import launcher_node
+
+
+def _stuck_launcher(release: threading.Event) -> types.SimpleNamespace:
+    """An object with the launcher's ROS parts whose executor shutdown blocks until
+    ``release`` (as the deadlocked destroy does, for ever)."""
+    calls: list[str] = []
+    return types.SimpleNamespace(
+        calls=calls,
+        executor=types.SimpleNamespace(shutdown=lambda timeout_sec: release.wait()),
+        node=types.SimpleNamespace(destroy_node=lambda: calls.append("node")),
+        context=types.SimpleNamespace(try_shutdown=lambda: calls.append("context")))
+
+
+def test_a_stuck_close_returns_after_its_timeout_and_keeps_the_lease(monkeypatch):
+    monkeypatch.setattr(launcher_node, "CLOSE_TIMEOUT_S", 0.3)
+    monkeypatch.setattr(launcher_node, "ABANDONED", [])
+    release = threading.Event()
+    fake = _stuck_launcher(release)
+    t0 = time.monotonic()
+    assert launcher_node.LauncherNode.close(fake, keep="the lease") is False
+    assert time.monotonic() - t0 >= 0.3  # it waited its timeout, no less
+    assert launcher_node.ABANDONED == [(fake, "the lease")]
+    assert fake.calls == []  # nothing destroyed past the stuck call
+    release.set()
+
+
+def test_a_close_that_ends_keeps_nothing(monkeypatch):
+    monkeypatch.setattr(launcher_node, "ABANDONED", [])
+    release = threading.Event()
+    release.set()
+    fake = _stuck_launcher(release)
+    assert launcher_node.LauncherNode.close(fake, keep="the lease") is True
+    assert fake.calls == ["node", "context"] and launcher_node.ABANDONED == []
+
+
+def test_fourws_leaves_with_its_exit_code_while_holding_a_stuck_participant():
+    """A process holding an abandoned participant leaves at once with the command's code,
+    its output flushed; a non-daemon thread that would keep a normal exit waiting (as the
+    stuck participant's destructor would) is not waited for."""
+    code = (
+        "import threading, sys\n"
+        "from fourws_ros import launcher_node\n"
+        "from fourws_cli.main import _leave_if_stuck\n"
+        "threading.Thread(target=threading.Event().wait).start()\n"
+        "launcher_node.ABANDONED.append((object(), None))\n"
+        "print('summary line', end='')\n"
+        "_leave_if_stuck(3)\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 3, res.stderr
+    assert res.stdout == "summary line"
