@@ -105,7 +105,8 @@ class ConstantRadius(PathFollowing):
         if abs(error) > p.max_path_error_m:
             self.end(f"path error {error:.2f} m exceeds max_path_error_m")
         elif abs(sideslip) > p.max_sideslip_rad:
-            self.end(f"sideslip {sideslip:.2f} rad exceeds max_sideslip_rad (spun)")
+            self.end(f"sideslip {sideslip:.2f} rad exceeds max_sideslip_rad (the driver "
+                     "cannot hold the circle)")
 
 
 @dataclass(frozen=True)
