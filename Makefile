@@ -25,10 +25,11 @@ setup: $(STAMP) $(MSGS_STAMP) $(KERNELS_STAMP)
 # One line per stage; the stage's own output goes to the terminal only when it fails.
 $(STAMP): requirements.txt $(LOCK) setup.py Makefile
 	@command -v python3 >/dev/null || { echo "python3 missing: apt-get install python3 python3-venv"; exit 1; }
-	@if ! command -v cmake >/dev/null || ! command -v g++ >/dev/null || ! python3 -c "import ensurepip" 2>/dev/null; then \
-	  echo "setup 1/5: installing cmake, g++ and python3-venv from Debian"; \
-	  apt-get update -qq && apt-get install -y -qq cmake g++ python3-venv python3-dev >/dev/null; \
-	else echo "setup 1/5: cmake, g++ and python3-venv are installed"; fi
+	@if ! command -v cmake >/dev/null || ! command -v g++ >/dev/null || ! python3 -c "import ensurepip" 2>/dev/null \
+	    || ! command -v node >/dev/null || ! command -v npm >/dev/null; then \
+	  echo "setup 1/5: installing cmake, g++, python3-venv and nodejs/npm (the live-view test's client) from Debian"; \
+	  apt-get update -qq && apt-get install -y -qq cmake g++ python3-venv python3-dev nodejs npm >/dev/null; \
+	else echo "setup 1/5: cmake, g++, python3-venv and nodejs/npm are installed"; fi
 	@echo "setup 2/5: Python packages into $(VENV), versions from $(LOCK) (about 1 min the first time)"
 	@test -x $(PY) || python3 -m venv $(VENV)
 	@$(PIP) install -q --upgrade pip -c $(LOCK) $(QUIET)
