@@ -58,7 +58,7 @@ import scipy.signal
 
 from fourws_analysis import frequency as fq
 from fourws_analysis.linear import RUN_CHANNELS, _standard_outputs
-from fourws_analysis.measured import COLUMN_BY_NAME, MIN_SAMPLES, MeasuredLog
+from fourws_analysis.measured import COLUMN_BY_NAME, MIN_SAMPLES, MeasuredLog, json_ready
 from fourws_run.interface import WHEELS
 from fourws_sim.drivers import SpeedHoldDriver, SpeedHoldSpec
 from fourws_sim.errors import DivergedError, FourwsError, ParameterError
@@ -677,7 +677,7 @@ class FitResult:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (``identification.json``)."""
         specs = [g.spec for g in self.groups]
-        return _finite({
+        return json_ready({
             "level": self.level, "level_reason": self.level_reason,
             "base_vehicle": self.base.name, "base_source": self.base.source,
             "data": [{"name": g.name, "source": g.source, "duration_s": g.duration_s,
@@ -693,18 +693,6 @@ class FitResult:
             "biases_fitted": self.bias,
             "evaluations": self.evaluations, "elapsed_s": self.elapsed_s,
             "notes": list(self.notes)})
-
-
-def _finite(obj: Any) -> Any:
-    if isinstance(obj, Mapping):
-        return {str(k): _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
 
 
 class ExcitationError(ParameterError):

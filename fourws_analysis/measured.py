@@ -586,6 +586,22 @@ def topic_columns(run: RunData, topics: Sequence[str], grid: np.ndarray) -> dict
     return out
 
 
+def json_ready(obj: Any) -> Any:
+    """``obj`` (mappings, lists and numbers, NumPy's included) as plain JSON values: a
+    non-finite number becomes None (JSON has no NaN), NumPy scalars plain ones, keys text."""
+    if isinstance(obj, Mapping):
+        return {str(k): json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    return obj
+
+
 __all__ = ["COLUMNS", "COLUMN_BY_NAME", "Column", "FORMATS", "MeasuredLog", "REQUIRED_COLUMNS",
-           "TIME_COLUMN", "check_log", "check_units", "columns_markdown", "hold", "load_log",
-           "log_from_run", "topic_columns", "write_table"]
+           "TIME_COLUMN", "check_log", "check_units", "columns_markdown", "hold", "json_ready",
+           "load_log", "log_from_run", "topic_columns", "write_table"]

@@ -58,7 +58,7 @@ import numpy as np
 
 from fourws_analysis import fmvss126
 from fourws_analysis.bag import MetricUnavailableError
-from fourws_analysis.measured import COLUMN_BY_NAME, MeasuredLog
+from fourws_analysis.measured import COLUMN_BY_NAME, MeasuredLog, json_ready
 from fourws_sim.errors import FourwsError, ParameterError
 from fourws_sim.maneuvers.esc import phaseless_lowpass
 
@@ -386,7 +386,7 @@ class ValidationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (``validation.json``)."""
-        return _finite({
+        return json_ready({
             "standard": self.standard, "passed": self.passed,
             "simulation": {"name": self.simulation.name, "source": self.simulation.source},
             "reference": {"name": self.reference.name, "source": self.reference.source},
@@ -394,18 +394,6 @@ class ValidationResult:
             "metrics": {m.key: m.to_dict() for m in self.metrics},
             "fmvss126_passed": dict(self.verdicts),
             "skipped": dict(self.skipped), "notes": list(self.notes)})
-
-
-def _finite(obj: Any) -> Any:
-    if isinstance(obj, Mapping):
-        return {str(k): _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
 
 
 # ------------------------------------------------------------------------------ iso19364
