@@ -37,6 +37,26 @@ for _name in USER_ROS_ENVIRONMENT:
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 
+@pytest.fixture(autouse=True)
+def _numba_cpu_features_kept():
+    """``fourws study`` run in-process sets numba's CPU features to 512-bit vectors for its
+    process and the workers it starts (``fourws_sim.lanes.use_wide_vectors``): kept, it gave
+    every later test's nodes other compile targets, so each compiled its kernels again instead
+    of loading ``make setup``'s cache. Restored after each test."""
+    import sys
+
+    before = os.environ.get("NUMBA_CPU_FEATURES")
+    yield
+    if os.environ.get("NUMBA_CPU_FEATURES") != before:
+        if before is None:
+            os.environ.pop("NUMBA_CPU_FEATURES", None)
+        else:
+            os.environ["NUMBA_CPU_FEATURES"] = before
+        config = sys.modules.get("numba.core.config")
+        if config is not None:
+            config.CPU_FEATURES = before
+
+
 @pytest.fixture
 def ros_domain(monkeypatch: pytest.MonkeyPatch):
     """Reserve a ROS domain ID for the test and export it (``ROS_DOMAIN_ID``)."""
