@@ -18,12 +18,14 @@ Speed-hold driver
 -----------------
 A PI controller from the speed error ``e = U_target - U`` (m/s) to a longitudinal acceleration
 request ``a = kp e + ki \int e dt`` (m/s^2), turned into a total wheel torque
-``T = m R (a + f_r g)`` (N m; ``m`` vehicle mass, ``R`` wheel radius, ``f_r`` rolling-resistance
-coefficient of the tire data). ``T > 0`` is shared equally by the driven wheels; ``T < 0`` is
-applied as brake torque split front/rear by ``brake_front_fraction`` (each axle's share equally
-on its two wheels). The integrator stops while the torque saturates (anti-windup by
-conditional integration). Vehicles with no ``body`` data (single-track models, which hold speed
-by construction) get zero torques.
+``T = m R (a + f_r g + D/m)`` (N m; ``m`` vehicle mass, ``R`` wheel radius, ``f_r``
+rolling-resistance coefficient of the tire data, ``D = 0.5 rho C_d A U |U|`` the aerodynamic
+drag of the ``aero`` data at the measured speed U, 0 without it: :func:`speed_hold_torque`).
+``T > 0`` is shared equally by the driven wheels; ``T < 0`` is applied as brake torque split
+front/rear by ``brake_front_fraction`` (each axle's share equally on its two wheels). The
+integrator stops while the torque saturates (anti-windup by conditional integration).
+Vehicles with no ``body`` data (single-track models, which hold speed by construction) get
+zero torques.
 
 Preview path follower
 ---------------------
@@ -206,6 +208,17 @@ def speed_hold_request(error_mps: float, integral_m: float, dt_s: float, kp_per_
     return min(max(request, -max_decel_mps2), max_accel_mps2), integral_m
 
 
+def speed_hold_torque(request_mps2: float, speed_mps: float, mass_kg: float, radius_m: float,
+                      rolling: float, drag_kg_per_m: float) -> float:
+    """Total wheel torque (N m; < 0 brakes) of the speed-hold driver for the acceleration
+    request ``request_mps2``: the request plus the resistances the driver knows, the rolling
+    resistance ``rolling`` (f_r) and the aerodynamic drag ``drag_kg_per_m`` U|U|
+    (0.5 rho C_d A, kg/m) at the measured speed ``speed_mps`` (m/s), times mass (kg) and wheel
+    radius (m). Without drag it is ``m R (a + f_r g)`` bit for bit."""
+    resist = rolling * GRAVITY_MPS2 + drag_kg_per_m / mass_kg * (speed_mps * abs(speed_mps))
+    return mass_kg * radius_m * (request_mps2 + resist)
+
+
 def split_brake_torque(total_nm: float, front_fraction: float
                        ) -> tuple[float, float, float, float]:
     """Split a total brake torque (N m, >= 0) over FL, FR, RL, RR by the front fraction."""
@@ -230,6 +243,8 @@ class SpeedHoldDriver:
         self._mass_kg = vehicle.chassis.mass_kg
         self._radius_m = vehicle.body.wheel_radius_m if vehicle.body is not None else 0.0
         self._rolling = vehicle.tire.rolling_resistance if vehicle.tire is not None else 0.0
+        self._drag = (vehicle.aero.drag_coefficient_kg_per_m if vehicle.aero is not None
+                      else 0.0)
         self._integral_m = 0.0
         self._t_prev: float | None = None
 
@@ -253,7 +268,8 @@ class SpeedHoldDriver:
         request, self._integral_m = speed_hold_request(
             target_mps - speed_mps, self._integral_m, dt, spec.kp_per_s, spec.ki_per_s2,
             spec.max_decel_mps2, spec.max_accel_mps2)
-        total_nm = self._mass_kg * self._radius_m * (request + self._rolling * GRAVITY_MPS2)
+        total_nm = speed_hold_torque(request, speed_mps, self._mass_kg, self._radius_m,
+                                     self._rolling, self._drag)
         if total_nm >= 0.0:
             wheels = _DRIVEN[self.spec.driven_axle]
             share = total_nm / len(wheels)
@@ -595,6 +611,6 @@ __all__ = [
     "CirclePath", "DriverCommand", "Path", "PathDriverSpec",
     "PathTrackingDriver", "PreviewPathDriver", "SplinePath", "SpeedHoldDriver", "SpeedHoldSpec",
     "TrackingDriverSpec", "path_driver_spec_from", "speed_hold_request", "speed_hold_spec_from",
-    "split_brake_torque",
+    "speed_hold_torque", "split_brake_torque",
     "tracking_driver_spec_from",
 ]

@@ -12,6 +12,7 @@ A vehicle file (``config/vehicles/<name>.yaml``) is a mapping with one key per s
     steering: {...}      # optional: free-control model, steering ratio of the 8-DOF
     tire: {...}          # optional: nonlinear tire choice and coefficients
     body: {...}          # optional: 8-DOF spread-tire geometry, wheels
+    aero: {...}          # optional: 8-DOF aerodynamic drag and lift (absent: none)
     actuators: {...}     # optional: rear-steer limits (defaults apply when absent)
 
 The same mapping may also sit under ``/**: ros__parameters: vehicle:`` (a ROS 2 parameter
@@ -645,6 +646,49 @@ class Body:
                                            bounds=(1e-7, 1e4))
 
 
+#: Sea-level air density of the ISO standard atmosphere (ISO 2533: 15 degC, 101.325 kPa),
+#: kg/m^3: ``aero.air_density_kgpm3`` when a file does not give one.
+AIR_DENSITY_KGPM3 = 1.225
+
+
+@dataclass(frozen=True)
+class Aero:
+    """Aerodynamic drag and lift of the 8-DOF model (``aero:``; absent = none, the paper's
+    model).
+
+    Still air, so the air speed is the body's longitudinal velocity U. Drag
+    ``D = 0.5 rho C_d A U |U|`` acts along the body's -x at the height of the CG (no pitch
+    moment about the CG: it decelerates the car without the forward load transfer of a
+    braking force at the ground). Lift ``0.5 rho C_l,i A U^2`` on axle i (front, rear)
+    takes that much load off the axle, half from each of its wheels (negative C_l A is
+    downforce). Side force and the aerodynamic yaw and roll moments are left out.
+    """
+
+    drag_area_m2: float = _spec("nonnegative", default=0.0,
+                                doc="C_d A, drag coefficient times frontal area",
+                                bounds=(0.0, 20.0))
+    lift_area_front_m2: float = _spec("any", default=0.0,
+                                      doc="C_l,f A, front-axle lift coefficient times area "
+                                          "(negative: downforce)", bounds=(-10.0, 10.0))
+    lift_area_rear_m2: float = _spec("any", default=0.0,
+                                     doc="C_l,r A, rear-axle lift coefficient times area "
+                                         "(negative: downforce)", bounds=(-10.0, 10.0))
+    air_density_kgpm3: float = _spec(default=AIR_DENSITY_KGPM3,
+                                     doc="rho, air density (ISO 2533 sea level by default)",
+                                     bounds=(0.3, 1.6))
+
+    @property
+    def drag_coefficient_kg_per_m(self) -> float:
+        """``0.5 rho C_d A`` in kg/m (N per (m/s)^2): the drag is this times U |U|."""
+        return 0.5 * self.air_density_kgpm3 * self.drag_area_m2
+
+    def lift_coefficients_kg_per_m(self) -> tuple[float, float]:
+        """``0.5 rho C_l,i A`` of the front and rear axle in kg/m: the axle's lift is this
+        times U^2 (N)."""
+        half_rho = 0.5 * self.air_density_kgpm3
+        return half_rho * self.lift_area_front_m2, half_rho * self.lift_area_rear_m2
+
+
 @dataclass(frozen=True)
 class Actuators:
     """Rear-steer actuator limits (defaults: 5 deg, 30 deg/s; production 4WS systems stay
@@ -663,6 +707,7 @@ _SUBSYSTEMS: dict[str, type] = {
     "steering": Steering,
     "tire": Tire,
     "body": Body,
+    "aero": Aero,
     "actuators": Actuators,
 }
 _REQUIRED = ("chassis", "axle_tires")
@@ -679,6 +724,7 @@ class Vehicle:
     steering: Steering | None = None
     tire: Tire | None = None
     body: Body | None = None
+    aero: Aero | None = None
     actuators: Actuators = field(default_factory=Actuators)
     description: str = ""
     source: str = field(default="", compare=False)

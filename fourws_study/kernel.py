@@ -292,6 +292,8 @@ def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
     drv[module.D_RADIUS] = vehicle.body.wheel_radius_m if vehicle.body is not None else 0.0
     drv[module.D_ROLLING] = (vehicle.tire.rolling_resistance if vehicle.tire is not None
                              else 0.0)
+    drv[module.D_DRAG] = (vehicle.aero.drag_coefficient_kg_per_m if vehicle.aero is not None
+                          else 0.0)
     drv[module.D_BRAKE_FRONT] = sh.brake_front_fraction
     driven = DRIVEN_WHEELS[sh.driven_axle]
     drv[module.D_N_DRIVEN] = float(sum(1 for w in driven if w))

@@ -122,6 +122,19 @@ Loads are clamped at 0 (a lifted wheel has no force).
 Rolling resistance (``tire.rolling_resistance`` :math:`f_r`, default 0) is a torque
 :math:`f_r F_z R` opposing wheel spin (part of the stick-slip friction torque above).
 
+Aerodynamic drag and lift (``aero``, :class:`fourws_sim.params.Aero`; absent = none)
+-----------------------------------------------------------------------------------
+Still air: the air speed is U. The drag :math:`D = \tfrac12\rho C_d A\,U|U|` acts on the
+body along -x, at the height of the CG, so it adds :math:`-D` to :math:`\sum F_x` and no
+moment about the CG. The longitudinal load transfer is the moment of the forces at the ground
+about the CG, and those sum to :math:`m a_x + D`, so it is :math:`(m a_x + D) h_{cg}/L`
+(coasting on drag alone transfers no load; drag at the ground would transfer
+:math:`D h_{cg}/L` to the front). The lift :math:`\tfrac12\rho C_{l,i} A\,U^2` of axle i
+(front, rear; negative = downforce) is taken off its static load, half from each wheel,
+before the transfers. Side force and aerodynamic yaw, pitch and roll moments are left out.
+With ``aero`` absent the three parameters are 0 and every result is that of the model
+without them, bit for bit (``test_bit_identical``).
+
 Free steering system (model ``8dof-free``)
 ------------------------------------------
 With fixed steering control (model ``8dof``, the paper's ch. 8) the front command is an input
@@ -274,6 +287,9 @@ class PARAM(IntEnum):
     TC_S = 35  #: steering Coulomb friction about the kingpins, N m
     N_S = 36  #: steering ratio (steering-wheel angle per road-wheel angle)
     RATE_S = 37  #: fastest steering-system rate, 1/s (sub-steps; 0 with fixed control)
+    DRAG = 38  #: aerodynamic drag per U|U|, 0.5 rho C_d A, kg/m (0 = no drag)
+    LIFT_F = 39  #: aerodynamic lift of one front wheel per U^2, 0.25 rho C_l,f A, kg/m
+    LIFT_R = 40  #: aerodynamic lift of one rear wheel per U^2, 0.25 rho C_l,r A, kg/m
 
 
 N_STATE = len(STATE)
@@ -497,6 +513,12 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
     if not (math.isfinite(v_min_mps) and v_min_mps > 0.0):
         raise ParameterError("v_min_mps", f"must be finite and > 0, got {v_min_mps!r}")
     arr[P.V_MIN] = v_min_mps
+    ae = vehicle.aero
+    if ae is not None:
+        arr[P.DRAG] = ae.drag_coefficient_kg_per_m
+        lift_f, lift_r = ae.lift_coefficients_kg_per_m()
+        arr[P.LIFT_F] = 0.5 * lift_f  # per wheel: half the axle's
+        arr[P.LIFT_R] = 0.5 * lift_r
     ratio = vehicle.steering.ratio if vehicle.steering is not None else 1.0
     if free_steering:
         _steering_parameters(arr, vehicle, module, coeffs_f)
@@ -695,10 +717,15 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     delta_r = u[I.DELTA_R] + q[P.EPS_R] * phi
     delta = np.array([delta_f, delta_f, delta_r, delta_r])
 
-    # normal loads: static + longitudinal + lateral transfer (Figures 8.3, 8.4)
+    # aerodynamic drag (N, along -x at the CG height) and lift per wheel (N)
+    drag = q[P.DRAG] * U * abs(U)
+    lift = np.array([q[P.LIFT_F], q[P.LIFT_F], q[P.LIFT_R], q[P.LIFT_R]]) * (U * U)
+
+    # normal loads: static less lift, + longitudinal + lateral transfer (Figures 8.3, 8.4);
+    # the forces at the ground sum to m ax + drag
     ax_lt, ay_lt = x[S.AX_LT], x[S.AY_LT]
-    static = m * g / (2.0 * L) * np.array([b, b, a, a])
-    d_long = m * ax_lt * q[P.H_CG] / L
+    static = m * g / (2.0 * L) * np.array([b, b, a, a]) - lift
+    d_long = (m * ax_lt + drag) * q[P.H_CG] / L
     m_front, m_rear = m * b / L, m * a / L
     d_lat_f = (q[P.K_PHI_F] * phi + q[P.C_PHI_F] * pr
                + m_front * (ms / m) * q[P.H_RC_F] * ay_lt
@@ -754,7 +781,7 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
     rhs_l = msh * c * U * r + msh * g * s - k_phi * phi - c_phi * pr
     vd, rd, pd = _solve_body(m, msh * c, q[P.IZ], q[P.IXZ], q[P.IX], rhs_y, sum_n, rhs_l)
-    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
+    ud = (sum_fx - drag + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
 
     # wheel spin (8.5-8.8) with stick-slip brake and rolling-resistance friction
     cap = np.maximum(u[I.BRAKE_FL:I.BRAKE_RR + 1], 0.0) + q[P.F_RR] * fz * rw

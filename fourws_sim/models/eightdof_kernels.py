@@ -116,6 +116,7 @@ k_tlt, k_tb, k_g, k_kspin = int(PARAM.TAU_LT), int(PARAM.TAU_B), int(PARAM.G), i
 k_sfree, k_js, k_nus, k_es = (int(PARAM.STEER_FREE), int(PARAM.J_S), int(PARAM.NU_S),
                               int(PARAM.E_S))
 k_tcs, k_ns, k_rates = int(PARAM.TC_S), int(PARAM.N_S), int(PARAM.RATE_S)
+k_drag, k_liftf, k_liftr = int(PARAM.DRAG), int(PARAM.LIFT_F), int(PARAM.LIFT_R)
 a_fz, a_al, a_ka, a_fx, a_fy, a_mz = _AUX_FZ, _AUX_ALPHA, _AUX_KAPPA, _AUX_FX, _AUX_FY, _AUX_MZ
 HELD_FLOOR = float(HELD_SPIN_FLOOR_RADPS)
 a_df, a_dr, a_ax, a_ay, a_rate = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY, _AUX_RATE
@@ -189,16 +190,22 @@ N_PT = _P_INV_SIGMA_R + 1
 # ------------------------------------------------------------------------------ equations
 # Plain numbers in, plain numbers out: no branch, no array (see the module docstring).
 
-def _wheel_loads(phi, pr, ax_lt, ay_lt, half_m, h_cg, inv_l,  # type: ignore
+def _wheel_loads(phi, pr, U, ax_lt, ay_lt, half_m, h_cg, inv_l,  # type: ignore
                  k_phi_f, c_phi_f, rc_f, hu_f, inv_tf, k_phi_r, c_phi_r, rc_r, hu_r, inv_tr,
-                 static_f, static_r):
-    """Normal loads FL, FR, RL, RR (N, before the clamp at 0): static, longitudinal and
-    lateral transfer (Figures 8.3, 8.4) from the roll state and the lagged accelerations."""
-    d_long = half_m * ax_lt * h_cg * inv_l
+                 static_f, static_r, drag, lift_f, lift_r):
+    """Normal loads FL, FR, RL, RR (N, before the clamp at 0): static less the aerodynamic
+    lift (``lift_f``, ``lift_r`` per wheel and U^2, kg/m), longitudinal transfer of the
+    forces at the ground (``m ax + drag``, ``drag`` per U|U| in kg/m) and lateral transfer
+    (Figures 8.3, 8.4) from the roll state and the lagged accelerations. With ``drag``,
+    ``lift_f``, ``lift_r`` zero the numbers are those without them, bit for bit."""
+    d_long = (half_m * ax_lt + 0.5 * drag * (U * abs(U))) * h_cg * inv_l
     d_lat_f = (k_phi_f * phi + c_phi_f * pr + rc_f * ay_lt + hu_f * ay_lt) * inv_tf
     d_lat_r = (k_phi_r * phi + c_phi_r * pr + rc_r * ay_lt + hu_r * ay_lt) * inv_tr
-    return ((static_f - d_long) - d_lat_f, (static_f - d_long) + d_lat_f,
-            (static_r + d_long) - d_lat_r, (static_r + d_long) + d_lat_r)
+    uu = U * U
+    load_f = static_f - lift_f * uu
+    load_r = static_r - lift_r * uu
+    return ((load_f - d_long) - d_lat_f, (load_f - d_long) + d_lat_f,
+            (load_r + d_long) - d_lat_r, (load_r + d_long) + d_lat_r)
 
 
 def _corner_slip(fz, U, V, r, xw, yw, cd, sd, omega, alpha_lag,  # type: ignore
@@ -254,11 +261,12 @@ def _corner_spin(fx, fy, mz, fz, omega, xw, yw, cd, sd, drive, brake,  # type: i
 
 def _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, psi,  # type: ignore
                 ax_lt, ay_lt, m, ix, ixz, msh, msh_g, k_phi, c_phi, ixz2, inv_m, inv_iz,
-                inv_tlt):
+                inv_tlt, drag):
     """The body's equations of motion (eqs. 8.1-8.4, 8.14: the 3x3 system in V', r', p'
     solved in closed form, then U'), the pose rates (8.15-8.17) and the lag of the
-    load-transfer accelerations, from the summed forces ``sum_fx, sum_fy`` (N) and yaw
-    moment ``sum_n`` (N m). Returns ``(U', V', r', p', ax, ay, X', Y', ax_lt', ay_lt')``."""
+    load-transfer accelerations, from the summed tire forces ``sum_fx, sum_fy`` (N) and yaw
+    moment ``sum_n`` (N m) and the aerodynamic drag ``drag`` U|U| (``drag`` in kg/m, along
+    -x at the CG). Returns ``(U', V', r', p', ax, ay, X', Y', ax_lt', ay_lt')``."""
     s, c = sincos(phi)
     mshc = msh * c
     rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
@@ -267,7 +275,7 @@ def _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, psi,  # type: ignore
     pd = (rhs_l + mshc * rhs_y * inv_m + ixz * sum_n * inv_iz) / det
     vd = (rhs_y + mshc * pd) * inv_m
     rd = (sum_n + ixz * pd) * inv_iz
-    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
+    ud = (sum_fx - drag * (U * abs(U)) + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
     ax = ud - V * r
     ay = vd + U * r
     sps, cps = sincos(psi)
@@ -343,9 +351,9 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     ax_lt = x[i_ax]
     ay_lt = x[i_ay]
     aux[a_fz], aux[a_fz + 1], aux[a_fz + 2], aux[a_fz + 3] = _wheel_loads(
-        phi, pr, ax_lt, ay_lt, pt[_P_HALF_M], q[k_hcg], pt[_P_INV_L], q[k_kf], q[k_cf],
+        phi, pr, U, ax_lt, ay_lt, pt[_P_HALF_M], q[k_hcg], pt[_P_INV_L], q[k_kf], q[k_cf],
         pt[_P_RCF], pt[_P_HUF], pt[_P_INV_TF], q[k_kr], q[k_cr], pt[_P_RCR], pt[_P_HUR],
-        pt[_P_INV_TR], pt[_P_STF], pt[_P_STR])
+        pt[_P_INV_TR], pt[_P_STF], pt[_P_STR], q[k_drag], q[k_liftf], q[k_liftr])
     sdf, cdf = sincos(delta_f)
     sdr, cdr = sincos(delta_r)
     rate = 0.0  # fastest slip mode, 1/s (sets the integrators' sub-steps)
@@ -394,7 +402,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
      dx[i_ay]) = _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, x[i_psi], ax_lt, ay_lt,
                              q[k_m], q[k_ix], q[k_ixz], pt[_P_MSH], pt[_P_MSHG], pt[_P_KPHI],
                              pt[_P_CPHI], pt[_P_IXZ2], pt[_P_INV_M], pt[_P_INV_IZ],
-                             pt[_P_INV_TLT])
+                             pt[_P_INV_TLT], q[k_drag])
     dx[i_phi] = pr
     dx[i_psi] = r
     aux[a_df] = delta_f
@@ -687,14 +695,16 @@ def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
         delta_f = IN[(R_U + j_df) * LANES + ln] + IN[(R_Q + k_ef) * LANES + ln] * phi
         delta_r = IN[(R_U + j_dr) * LANES + ln] + IN[(R_Q + k_er) * LANES + ln] * phi
         fz_fl, fz_fr, fz_rl, fz_rr = _wheel_loads(
-            phi, pr, ax_lt, ay_lt, IN[(R_PT + _P_HALF_M) * LANES + ln],
+            phi, pr, U_, ax_lt, ay_lt, IN[(R_PT + _P_HALF_M) * LANES + ln],
             IN[(R_Q + k_hcg) * LANES + ln], IN[(R_PT + _P_INV_L) * LANES + ln],
             IN[(R_Q + k_kf) * LANES + ln], IN[(R_Q + k_cf) * LANES + ln],
             IN[(R_PT + _P_RCF) * LANES + ln], IN[(R_PT + _P_HUF) * LANES + ln],
             IN[(R_PT + _P_INV_TF) * LANES + ln], IN[(R_Q + k_kr) * LANES + ln],
             IN[(R_Q + k_cr) * LANES + ln], IN[(R_PT + _P_RCR) * LANES + ln],
             IN[(R_PT + _P_HUR) * LANES + ln], IN[(R_PT + _P_INV_TR) * LANES + ln],
-            IN[(R_PT + _P_STF) * LANES + ln], IN[(R_PT + _P_STR) * LANES + ln])
+            IN[(R_PT + _P_STF) * LANES + ln], IN[(R_PT + _P_STR) * LANES + ln],
+            IN[(R_Q + k_drag) * LANES + ln], IN[(R_Q + k_liftf) * LANES + ln],
+            IN[(R_Q + k_liftr) * LANES + ln])
         sdf, cdf = sincos(delta_f)
         sdr, cdr = sincos(delta_r)
         sig_f = IN[(R_PT + _P_INV_SIGMA_F) * LANES + ln]
@@ -735,7 +745,7 @@ def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
             IN[(R_PT + _P_MSHG) * LANES + ln], IN[(R_PT + _P_KPHI) * LANES + ln],
             IN[(R_PT + _P_CPHI) * LANES + ln], IN[(R_PT + _P_IXZ2) * LANES + ln],
             IN[(R_PT + _P_INV_M) * LANES + ln], IN[(R_PT + _P_INV_IZ) * LANES + ln],
-            IN[(R_PT + _P_INV_TLT) * LANES + ln])
+            IN[(R_PT + _P_INV_TLT) * LANES + ln], IN[(R_Q + k_drag) * LANES + ln])
         OUT[(R_DX + i_u) * LANES + ln] = ud
         OUT[(R_DX + i_v) * LANES + ln] = vd
         OUT[(R_DX + i_r) * LANES + ln] = rd
