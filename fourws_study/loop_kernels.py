@@ -70,9 +70,10 @@ N_CHANNELS = len(CHANNELS)
 STATE_CHANNELS = CHANNELS[:C_HAND]
 
 #: Slots of the driver parameter vector ``drv``.
+#: ``D_DRIVEN_*``: each wheel's share of the drive torque (``drivers.drive_fractions``).
 (D_ENABLED, D_KP, D_KI, D_MAX_DECEL, D_MAX_ACCEL, D_MASS, D_RADIUS, D_ROLLING, D_BRAKE_FRONT,
- D_N_DRIVEN, D_DRIVEN_FL, D_DRIVEN_FR, D_DRIVEN_RL, D_DRIVEN_RR, D_TARGET, D_TORQUE_LIMIT,
- D_REAR_LIMIT, D_DRAG) = range(18)
+ D_DRIVEN_FL, D_DRIVEN_FR, D_DRIVEN_RL, D_DRIVEN_RR, D_TARGET, D_TORQUE_LIMIT,
+ D_REAR_LIMIT, D_DRAG) = range(17)
 N_DRIVER = D_DRAG + 1
 
 #: Exit codes: every tick run, or where the interpreted twin must take over.
@@ -153,10 +154,9 @@ def _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv,  # type: ignore
         total = speed_hold_torque(request, U, drv[D_MASS], drv[D_RADIUS], drv[D_ROLLING],
                                   drv[D_DRAG])
         if total >= 0.0:
-            share = total / drv[D_N_DRIVEN]
             for i in range(4):
-                if drv[D_DRIVEN_FL + i] != 0.0:
-                    drive[i] = share
+                if drv[D_DRIVEN_FL + i] > 0.0:
+                    drive[i] = total * drv[D_DRIVEN_FL + i]
         else:
             bfl, bfr, brl, brr = split_brake_torque(-total, drv[D_BRAKE_FRONT])
             brake[0] = bfl
