@@ -18,12 +18,16 @@ Speed-hold driver
 -----------------
 A PI controller from the speed error ``e = U_target - U`` (m/s) to a longitudinal acceleration
 request ``a = kp e + ki \int e dt`` (m/s^2), turned into a total wheel torque
-``T = m R (a + f_r g)`` (N m; ``m`` vehicle mass, ``R`` wheel radius, ``f_r`` rolling-resistance
-coefficient of the tire data). ``T > 0`` is shared equally by the driven wheels; ``T < 0`` is
-applied as brake torque split front/rear by ``brake_front_fraction`` (each axle's share equally
-on its two wheels). The integrator stops while the torque saturates (anti-windup by
-conditional integration). Vehicles with no ``body`` data (single-track models, which hold speed
-by construction) get zero torques.
+``T = m R (a + f_r g + D/m)`` (N m; ``m`` vehicle mass, ``R`` wheel radius, ``f_r``
+rolling-resistance coefficient of the tire data, ``D = 0.5 rho C_d A U |U|`` the aerodynamic
+drag of the ``aero`` data at the measured speed U, 0 without it: :func:`speed_hold_torque`).
+``T > 0`` goes to the driven axles (the vehicle's ``driveline``: its ``drive`` and front
+torque fraction; without one ``driven_axle``), each axle's share equally to its two wheels
+(the open split its differential starts from: :func:`drive_fractions`); ``T < 0`` is applied
+as brake torque split front/rear by ``brake_front_fraction`` (each axle's share equally on
+its two wheels). The integrator stops while the torque saturates (anti-windup by
+conditional integration). Vehicles with no ``body`` data (single-track models, which hold
+speed by construction) get zero torques.
 
 Preview path follower
 ---------------------
@@ -96,12 +100,12 @@ from typing import Any, Mapping, Protocol
 import numpy as np
 
 from fourws_sim.errors import ParameterError
-from fourws_sim.params import (GRAVITY_MPS2, MAX_SPEED_MPS, N_WHEELS, Vehicle, _from_mapping,
+from fourws_sim.params import (GRAVITY_MPS2, MAX_SPEED_MPS, Vehicle, _from_mapping,
                                _spec)
 
-_FRONT_WHEELS = (0, 1)
-_REAR_WHEELS = (2, 3)
-_DRIVEN = {"front": _FRONT_WHEELS, "rear": _REAR_WHEELS, "all": (0, 1, 2, 3)}
+#: Front axle's share of the drive torque for each ``driven_axle`` (``all``: equal torque per
+#: wheel; a vehicle's ``driveline`` gives its own split).
+_FRONT_SHARE = {"front": 1.0, "rear": 0.0, "all": 0.5}
 
 
 @dataclass(frozen=True)
@@ -169,10 +173,10 @@ class SpeedHoldSpec:
                unchecked: frozenset[str] = frozenset()) -> None:
         if not isinstance(self.enabled, bool):
             raise ParameterError(f"{prefix}enabled", "must be true or false", source)
-        if self.driven_axle not in _DRIVEN:
+        if self.driven_axle not in _FRONT_SHARE:
             raise ParameterError(f"{prefix}driven_axle",
-                                 f"must be one of {', '.join(_DRIVEN)}, got {self.driven_axle!r}",
-                                 source)
+                                 f"must be one of {', '.join(_FRONT_SHARE)}, got "
+                                 f"{self.driven_axle!r}", source)
 
 
 def speed_hold_request(error_mps: float, integral_m: float, dt_s: float, kp_per_s: float,
@@ -206,6 +210,28 @@ def speed_hold_request(error_mps: float, integral_m: float, dt_s: float, kp_per_
     return min(max(request, -max_decel_mps2), max_accel_mps2), integral_m
 
 
+def drive_fractions(driven_axle: str, vehicle: Vehicle) -> tuple[float, float, float, float]:
+    """Each wheel's share (FL, FR, RL, RR) of the speed-hold driver's drive torque: the
+    vehicle's ``driveline`` (driven axles and front torque fraction) if it has one, else
+    ``driven_axle``; an axle's share in equal halves (its differential's open split).
+    Without a driveline every share is 0 or 1/n of the n driven wheels, so ``T * share`` is
+    the former ``T / n`` bit for bit."""
+    dl = vehicle.driveline
+    front = dl.front_fraction() if dl is not None else _FRONT_SHARE[driven_axle]
+    return (0.5 * front, 0.5 * front, 0.5 * (1.0 - front), 0.5 * (1.0 - front))
+
+
+def speed_hold_torque(request_mps2: float, speed_mps: float, mass_kg: float, radius_m: float,
+                      rolling: float, drag_kg_per_m: float) -> float:
+    """Total wheel torque (N m; < 0 brakes) of the speed-hold driver for the acceleration
+    request ``request_mps2``: the request plus the resistances the driver knows, the rolling
+    resistance ``rolling`` (f_r) and the aerodynamic drag ``drag_kg_per_m`` U|U|
+    (0.5 rho C_d A, kg/m) at the measured speed ``speed_mps`` (m/s), times mass (kg) and wheel
+    radius (m). Without drag it is ``m R (a + f_r g)`` bit for bit."""
+    resist = rolling * GRAVITY_MPS2 + drag_kg_per_m / mass_kg * (speed_mps * abs(speed_mps))
+    return mass_kg * radius_m * (request_mps2 + resist)
+
+
 def split_brake_torque(total_nm: float, front_fraction: float
                        ) -> tuple[float, float, float, float]:
     """Split a total brake torque (N m, >= 0) over FL, FR, RL, RR by the front fraction."""
@@ -230,6 +256,9 @@ class SpeedHoldDriver:
         self._mass_kg = vehicle.chassis.mass_kg
         self._radius_m = vehicle.body.wheel_radius_m if vehicle.body is not None else 0.0
         self._rolling = vehicle.tire.rolling_resistance if vehicle.tire is not None else 0.0
+        self._drag = (vehicle.aero.drag_coefficient_kg_per_m if vehicle.aero is not None
+                      else 0.0)
+        self._fractions = drive_fractions(spec.driven_axle, vehicle)
         self._integral_m = 0.0
         self._t_prev: float | None = None
 
@@ -253,11 +282,10 @@ class SpeedHoldDriver:
         request, self._integral_m = speed_hold_request(
             target_mps - speed_mps, self._integral_m, dt, spec.kp_per_s, spec.ki_per_s2,
             spec.max_decel_mps2, spec.max_accel_mps2)
-        total_nm = self._mass_kg * self._radius_m * (request + self._rolling * GRAVITY_MPS2)
+        total_nm = speed_hold_torque(request, speed_mps, self._mass_kg, self._radius_m,
+                                     self._rolling, self._drag)
         if total_nm >= 0.0:
-            wheels = _DRIVEN[self.spec.driven_axle]
-            share = total_nm / len(wheels)
-            drive = tuple(share if i in wheels else 0.0 for i in range(N_WHEELS))
+            drive = tuple(total_nm * w if w > 0.0 else 0.0 for w in self._fractions)
             return drive, zeros
         return zeros, split_brake_torque(-total_nm, self.spec.brake_front_fraction)
 
@@ -595,6 +623,6 @@ __all__ = [
     "CirclePath", "DriverCommand", "Path", "PathDriverSpec",
     "PathTrackingDriver", "PreviewPathDriver", "SplinePath", "SpeedHoldDriver", "SpeedHoldSpec",
     "TrackingDriverSpec", "path_driver_spec_from", "speed_hold_request", "speed_hold_spec_from",
-    "split_brake_torque",
+    "drive_fractions", "speed_hold_torque", "split_brake_torque",
     "tracking_driver_spec_from",
 ]

@@ -12,6 +12,8 @@ A vehicle file (``config/vehicles/<name>.yaml``) is a mapping with one key per s
     steering: {...}      # optional: free-control model, steering ratio of the 8-DOF
     tire: {...}          # optional: nonlinear tire choice and coefficients
     body: {...}          # optional: 8-DOF spread-tire geometry, wheels
+    aero: {...}          # optional: 8-DOF aerodynamic drag and lift (absent: none)
+    driveline: {...}     # optional: driven axles, torque split, differentials
     actuators: {...}     # optional: rear-steer limits (defaults apply when absent)
 
 The same mapping may also sit under ``/**: ros__parameters: vehicle:`` (a ROS 2 parameter
@@ -645,6 +647,117 @@ class Body:
                                            bounds=(1e-7, 1e4))
 
 
+#: Sea-level air density of the ISO standard atmosphere (ISO 2533: 15 degC, 101.325 kPa),
+#: kg/m^3: ``aero.air_density_kgpm3`` when a file does not give one.
+AIR_DENSITY_KGPM3 = 1.225
+
+
+@dataclass(frozen=True)
+class Aero:
+    """Aerodynamic drag and lift of the 8-DOF model (``aero:``; absent = none, the paper's
+    model).
+
+    Still air, so the air speed is the body's longitudinal velocity U. Drag
+    ``D = 0.5 rho C_d A U |U|`` acts along the body's -x at the height of the CG (no pitch
+    moment about the CG: it decelerates the car without the forward load transfer of a
+    braking force at the ground). Lift ``0.5 rho C_l,i A U^2`` on axle i (front, rear)
+    takes that much load off the axle, half from each of its wheels (negative C_l A is
+    downforce). Side force and the aerodynamic yaw and roll moments are left out.
+    """
+
+    drag_area_m2: float = _spec("nonnegative", default=0.0,
+                                doc="C_d A, drag coefficient times frontal area",
+                                bounds=(0.0, 20.0))
+    lift_area_front_m2: float = _spec("any", default=0.0,
+                                      doc="C_l,f A, front-axle lift coefficient times area "
+                                          "(negative: downforce)", bounds=(-10.0, 10.0))
+    lift_area_rear_m2: float = _spec("any", default=0.0,
+                                     doc="C_l,r A, rear-axle lift coefficient times area "
+                                         "(negative: downforce)", bounds=(-10.0, 10.0))
+    air_density_kgpm3: float = _spec(default=AIR_DENSITY_KGPM3,
+                                     doc="rho, air density (ISO 2533 sea level by default)",
+                                     bounds=(0.3, 1.6))
+
+    @property
+    def drag_coefficient_kg_per_m(self) -> float:
+        """``0.5 rho C_d A`` in kg/m (N per (m/s)^2): the drag is this times U |U|."""
+        return 0.5 * self.air_density_kgpm3 * self.drag_area_m2
+
+    def lift_coefficients_kg_per_m(self) -> tuple[float, float]:
+        """``0.5 rho C_l,i A`` of the front and rear axle in kg/m: the axle's lift is this
+        times U^2 (N)."""
+        half_rho = 0.5 * self.air_density_kgpm3
+        return half_rho * self.lift_area_front_m2, half_rho * self.lift_area_rear_m2
+
+
+#: Driven axles a driveline may have (``driveline.drive``; the speed-hold driver's
+#: ``driven_axle`` takes the same names).
+DRIVES = ("front", "rear", "all")
+#: Differentials of an axle: ``open`` (equal torque to both wheels), ``locked`` (both wheels
+#: at one speed), ``limited_slip`` (a viscous coupling and/or a torque bias ratio).
+DIFFERENTIALS = ("open", "locked", "limited_slip")
+
+
+@dataclass(frozen=True)
+class Driveline:
+    """Drive torque split and differentials of the 8-DOF model (``driveline:``; absent = the
+    speed-hold driver's ``driven_axle`` with open differentials, equal torque per driven
+    wheel).
+
+    ``drive`` names the driven axles (it replaces the maneuvers' ``speed_hold.driven_axle``);
+    with ``all`` the front axle gets ``front_torque_fraction`` of the drive torque. On each
+    axle the differential takes the axle's torque and gives its wheels equal shares less a
+    locking torque ``T_lock`` moved from the faster wheel to the slower one:
+    ``T_lock = c_v (omega_fast - omega_slow) + k_b |T_axle| s / 2`` with the viscous coupling
+    ``c_v`` (N m s/rad), ``k_b = (TBR - 1)/(TBR + 1)`` of the torque bias ratio TBR (the
+    slower wheel gets up to TBR times the faster one's torque) and ``s`` the speed
+    difference over ``eightdof.BIAS_BAND_RADPS``, at most 1 (a smooth onset, no chatter at
+    equal speeds). ``locked`` is a coupling stiff enough to hold the wheels together within
+    ``eightdof.LOCK_TIME_S``.
+    """
+
+    drive: str = "rear"
+    front_torque_fraction: float = _spec("fraction", default=0.5,
+                                         doc="front axle's share of the drive torque "
+                                             "(drive: all)", bounds=(0.0, 1.0))
+    differential_front: str = "open"
+    differential_rear: str = "open"
+    viscous_coupling_front_nms_per_rad: float = _spec(
+        "nonnegative", default=0.0, doc="c_v of a limited-slip front differential",
+        bounds=(0.0, 1e4))
+    viscous_coupling_rear_nms_per_rad: float = _spec(
+        "nonnegative", default=0.0, doc="c_v of a limited-slip rear differential",
+        bounds=(0.0, 1e4))
+    torque_bias_ratio_front: float = _spec(
+        default=1.0, doc="TBR of a limited-slip front differential (1 = none)",
+        bounds=(1.0, 10.0))
+    torque_bias_ratio_rear: float = _spec(
+        default=1.0, doc="TBR of a limited-slip rear differential (1 = none)",
+        bounds=(1.0, 10.0))
+
+    def front_fraction(self) -> float:
+        """Front axle's share of the drive torque (0 rear drive, 1 front drive)."""
+        return {"front": 1.0, "rear": 0.0, "all": self.front_torque_fraction}[self.drive]
+
+    def _check(self, source: str | None, prefix: str,
+               unchecked: frozenset[str] = frozenset()) -> None:
+        if self.drive not in DRIVES:
+            raise ParameterError(f"{prefix}drive", f"must be one of {', '.join(DRIVES)}, got "
+                                                   f"{describe(self.drive)}", source)
+        for axle in ("front", "rear"):
+            kind = getattr(self, f"differential_{axle}")
+            if kind not in DIFFERENTIALS:
+                raise ParameterError(f"{prefix}differential_{axle}",
+                                     f"must be one of {', '.join(DIFFERENTIALS)}, got "
+                                     f"{describe(kind)}", source)
+            coupled = (getattr(self, f"viscous_coupling_{axle}_nms_per_rad") > 0.0
+                       or getattr(self, f"torque_bias_ratio_{axle}") > 1.0)
+            if coupled and kind != "limited_slip":
+                raise ParameterError(f"{prefix}differential_{axle}",
+                                     f"is {kind}: a viscous coupling or torque bias ratio "
+                                     "needs limited_slip", source)
+
+
 @dataclass(frozen=True)
 class Actuators:
     """Rear-steer actuator limits (defaults: 5 deg, 30 deg/s; production 4WS systems stay
@@ -663,6 +776,8 @@ _SUBSYSTEMS: dict[str, type] = {
     "steering": Steering,
     "tire": Tire,
     "body": Body,
+    "aero": Aero,
+    "driveline": Driveline,
     "actuators": Actuators,
 }
 _REQUIRED = ("chassis", "axle_tires")
@@ -679,6 +794,8 @@ class Vehicle:
     steering: Steering | None = None
     tire: Tire | None = None
     body: Body | None = None
+    aero: Aero | None = None
+    driveline: Driveline | None = None
     actuators: Actuators = field(default_factory=Actuators)
     description: str = ""
     source: str = field(default="", compare=False)

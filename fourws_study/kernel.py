@@ -53,6 +53,7 @@ from fourws_run.closed_loop import ClosedLoopResult, run_twin
 from fourws_run.config import RunConfig
 from fourws_run.ticks import InputLimits, whole_multiple
 from fourws_sim import variants
+from fourws_sim.drivers import drive_fractions
 from fourws_sim.maneuvers import Maneuver, make_maneuver
 from fourws_sim.models import eightdof
 from fourws_sim.outcome import VehicleLimits
@@ -60,10 +61,6 @@ from fourws_sim.outcome import VehicleLimits
 #: Maneuver types whose steering depends on time only and whose driver holds the initial speed
 #: throughout (the compiled path takes them; the others need the interpreted twin).
 TIME_STEERED = ("step_steer", "ramp_steer", "sine", "swept_sine", "random_steer", "pulse")
-#: Wheels driven by the speed-hold driver for each ``speed_hold.driven_axle`` (FL, FR, RL, RR),
-#: as :class:`fourws_sim.drivers.SpeedHoldDriver` routes its torque.
-DRIVEN_WHEELS = {"front": (1.0, 1.0, 0.0, 0.0), "rear": (0.0, 0.0, 1.0, 1.0),
-                 "all": (1.0, 1.0, 1.0, 1.0)}
 #: What the twin says of a run it completed.
 DURATION = "duration"
 
@@ -299,10 +296,10 @@ def prepare_compiled(config: RunConfig, law: Law) -> Prepared | str:
     drv[module.D_RADIUS] = vehicle.body.wheel_radius_m if vehicle.body is not None else 0.0
     drv[module.D_ROLLING] = (vehicle.tire.rolling_resistance if vehicle.tire is not None
                              else 0.0)
+    drv[module.D_DRAG] = (vehicle.aero.drag_coefficient_kg_per_m if vehicle.aero is not None
+                          else 0.0)
     drv[module.D_BRAKE_FRONT] = sh.brake_front_fraction
-    driven = DRIVEN_WHEELS[sh.driven_axle]
-    drv[module.D_N_DRIVEN] = float(sum(1 for w in driven if w))
-    drv[module.D_DRIVEN_FL:module.D_DRIVEN_FL + 4] = driven
+    drv[module.D_DRIVEN_FL:module.D_DRIVEN_FL + 4] = drive_fractions(sh.driven_axle, vehicle)
     drv[module.D_TARGET] = speed
     drv[module.D_TORQUE_LIMIT] = limits.torque_limit_nm
     drv[module.D_REAR_LIMIT] = limits.rear_angle_limit_rad
@@ -414,6 +411,6 @@ def _run_group(block: list[Prepared], lanes: bool) -> list[LoopRecord | str]:
                     seconds * int(n_ticks[j]) / total) for j, p in enumerate(block)]
 
 
-__all__ = ["DRIVEN_WHEELS", "LOOP_TEMPLATE", "LoopRecord", "Prepared", "TIME_STEERED",
+__all__ = ["LOOP_TEMPLATE", "LoopRecord", "Prepared", "TIME_STEERED",
            "build_law", "compiled_plan", "loop_kernel_for", "prepare_compiled", "run_compiled",
            "run_compiled_block", "run_interpreted", "twin_record"]

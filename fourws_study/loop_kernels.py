@@ -42,13 +42,12 @@ import numpy as np
 from fourws_control import compiled
 from fourws_control.base import actuator_step, gain_speed, rear_angle_of
 from fourws_sim import drivers, variants
-from fourws_sim.drivers import speed_hold_request, split_brake_torque
+from fourws_sim.drivers import speed_hold_request, speed_hold_torque, split_brake_torque
 from fourws_sim.lanes import LANES
 from fourws_sim import outcome
 from fourws_sim.models.eightdof import (INPUT, N_AUX, N_INPUT, N_STATE, STATE, aux_from_array,
                                         kernel_module, kernels_for, lane_kernels_for)
 from fourws_sim.outcome import NO_BREACH, breach_code
-from fourws_sim.params import GRAVITY_MPS2
 
 #: Tire model of this variant (:func:`fourws_sim.variants.tire_of` its module name).
 TIRE_NAME: str = variants.tire_of(__name__)
@@ -60,7 +59,7 @@ _rhs = _KERNELS.rhs
 #: The law's gains by law kind (:func:`fourws_control.compiled.compiled_gains`, which also
 #: lets numba compile the law step's plain functions); the driver's plain functions.
 _law_gains = compiled.compiled_gains()
-variants.register_plain((speed_hold_request, split_brake_torque, breach_code))
+variants.register_plain((speed_hold_request, speed_hold_torque, split_brake_torque, breach_code))
 
 #: Recorded channels, one column each of the kernel's output (SI units; the names of
 #: ``VehicleState`` and of :class:`fourws_analysis.bag.UniformRun`).
@@ -78,9 +77,10 @@ STATE_CHANNELS = CHANNELS[:C_HAND]
 
 #: Slots of the driver parameter vector ``drv`` (the speed-hold driver, the simulator's input
 #: limits, the maneuver's vehicle limits).
+#: ``D_DRIVEN_*``: each wheel's share of the drive torque (``drivers.drive_fractions``).
 (D_ENABLED, D_KP, D_KI, D_MAX_DECEL, D_MAX_ACCEL, D_MASS, D_RADIUS, D_ROLLING, D_BRAKE_FRONT,
- D_N_DRIVEN, D_DRIVEN_FL, D_DRIVEN_FR, D_DRIVEN_RL, D_DRIVEN_RR, D_TARGET, D_TORQUE_LIMIT,
- D_REAR_LIMIT, D_MAX_SIDESLIP, D_MIN_SPEED, D_MAX_ROLL) = range(20)
+ D_DRIVEN_FL, D_DRIVEN_FR, D_DRIVEN_RL, D_DRIVEN_RR, D_TARGET, D_TORQUE_LIMIT,
+ D_REAR_LIMIT, D_DRAG, D_MAX_SIDESLIP, D_MIN_SPEED, D_MAX_ROLL) = range(20)
 N_DRIVER = D_MAX_ROLL + 1
 
 #: Exit codes: every tick run; the run ended at a state past the maneuver's vehicle limits
@@ -96,7 +96,6 @@ j_d0, j_b0 = int(INPUT.DRIVE_FL), int(INPUT.BRAKE_FL)
 _SLOTS = aux_from_array(np.arange(N_AUX, dtype=np.float64))
 a_df, a_dr = int(_SLOTS.delta_f_rad), int(_SLOTS.delta_r_rad)
 a_ax, a_ay = int(_SLOTS.ax_mps2), int(_SLOTS.ay_mps2)
-G = float(GRAVITY_MPS2)
 
 
 def _gains(kind, speed, params, out):  # type: ignore[no-untyped-def]
@@ -160,12 +159,12 @@ def _respond(x, u, k, dt, n_step, row, hand_k, front_k, drv,  # type: ignore
         request, carry[0] = speed_hold_request(
             drv[D_TARGET] - U, carry[0], dt_drv, drv[D_KP], drv[D_KI], drv[D_MAX_DECEL],
             drv[D_MAX_ACCEL])
-        total = drv[D_MASS] * drv[D_RADIUS] * (request + drv[D_ROLLING] * G)
+        total = speed_hold_torque(request, U, drv[D_MASS], drv[D_RADIUS], drv[D_ROLLING],
+                                  drv[D_DRAG])
         if total >= 0.0:
-            share = total / drv[D_N_DRIVEN]
             for i in range(4):
-                if drv[D_DRIVEN_FL + i] != 0.0:
-                    drive[i] = share
+                if drv[D_DRIVEN_FL + i] > 0.0:
+                    drive[i] = total * drv[D_DRIVEN_FL + i]
         else:
             bfl, bfr, brl, brr = split_brake_torque(-total, drv[D_BRAKE_FRONT])
             brake[0] = bfl

@@ -122,6 +122,40 @@ Loads are clamped at 0 (a lifted wheel has no force).
 Rolling resistance (``tire.rolling_resistance`` :math:`f_r`, default 0) is a torque
 :math:`f_r F_z R` opposing wheel spin (part of the stick-slip friction torque above).
 
+Aerodynamic drag and lift (``aero``, :class:`fourws_sim.params.Aero`; absent = none)
+-----------------------------------------------------------------------------------
+Still air: the air speed is U. The drag :math:`D = \tfrac12\rho C_d A\,U|U|` acts on the
+body along -x, at the height of the CG, so it adds :math:`-D` to :math:`\sum F_x` and no
+moment about the CG. The longitudinal load transfer is the moment of the forces at the ground
+about the CG, and those sum to :math:`m a_x + D`, so it is :math:`(m a_x + D) h_{cg}/L`
+(coasting on drag alone transfers no load; drag at the ground would transfer
+:math:`D h_{cg}/L` to the front). The lift :math:`\tfrac12\rho C_{l,i} A\,U^2` of axle i
+(front, rear; negative = downforce) is taken off its static load, half from each wheel,
+before the transfers. Side force and aerodynamic yaw, pitch and roll moments are left out.
+With ``aero`` absent the three parameters are 0 and every result is that of the model
+without them, bit for bit (``test_bit_identical``).
+
+Differentials (``driveline``, :class:`fourws_sim.params.Driveline`; absent = open)
+--------------------------------------------------------------------------------
+The drive torque inputs are what the driveline gives each axle's differential, split equally
+between its wheels (``T_l = T_r = T_axle/2``: an open differential, what the speed-hold
+driver sends). The differential moves a locking torque from the faster to the slower wheel,
+
+.. math::
+
+    T_{lock} = c_v(\omega_l - \omega_r) + \tfrac12 k_b\,|T_l + T_r|\,
+               \mathrm{sat}\big((\omega_l - \omega_r)/\Delta\omega_b\big), \qquad
+    T_l' = T_l - T_{lock}, \quad T_r' = T_r + T_{lock},
+
+with the viscous coupling :math:`c_v` (N m s/rad) and :math:`k_b = (TBR - 1)/(TBR + 1)` of
+the torque bias ratio (at full bias the slower wheel gets TBR times the faster one's
+torque), :math:`\Delta\omega_b` = :data:`BIAS_BAND_RADPS`. A locked differential is the
+coupling :math:`c_v = I_w/(2\tau_l)` (:data:`LOCK_TIME_S`): the wheels' speed difference
+decays with :math:`\tau_l`. The gears' inertia is left out. The coupling's rate
+:math:`(2c_v + k_b|T|/\Delta\omega_b)/I_w` joins the sub-step rates. The yaw moment of a
+locking torque on an axle of track T through the tire forces (at steady spin) is
+:math:`T\,T_{lock}/R`: positive (to the left) when the left wheel spins faster.
+
 Free steering system (model ``8dof-free``)
 ------------------------------------------
 With fixed steering control (model ``8dof``, the paper's ch. 8) the front command is an input
@@ -274,6 +308,13 @@ class PARAM(IntEnum):
     TC_S = 35  #: steering Coulomb friction about the kingpins, N m
     N_S = 36  #: steering ratio (steering-wheel angle per road-wheel angle)
     RATE_S = 37  #: fastest steering-system rate, 1/s (sub-steps; 0 with fixed control)
+    DRAG = 38  #: aerodynamic drag per U|U|, 0.5 rho C_d A, kg/m (0 = no drag)
+    LIFT_F = 39  #: aerodynamic lift of one front wheel per U^2, 0.25 rho C_l,f A, kg/m
+    LIFT_R = 40  #: aerodynamic lift of one rear wheel per U^2, 0.25 rho C_l,r A, kg/m
+    VISC_F = 41  #: front differential's viscous coupling, N m s/rad (0 = open)
+    VISC_R = 42  #: rear differential's viscous coupling, N m s/rad
+    BIAS_F = 43  #: front differential's bias, (TBR - 1)/(TBR + 1) (0 = open)
+    BIAS_R = 44  #: rear differential's bias
 
 
 N_STATE = len(STATE)
@@ -309,6 +350,15 @@ EULER_RATE_BOUND = 1.0
 #: refused by :func:`check_step` (the simulation would run 1000 times slower than at 1 ms).
 MAX_SUBSTEPS = 1000
 
+#: Wheel speed difference over which a torque-bias differential's locking torque builds up
+#: to its full value, rad/s (0.15 m/s at a 0.29 m rim): a smooth onset, so the locking
+#: torque does not chatter when the two wheels turn at nearly the same speed.
+BIAS_BAND_RADPS = 0.5
+#: Time constant with which a locked differential holds its two wheels together, s: a
+#: coupling of I_w / (2 LOCK_TIME_S) between the half shafts (1000 N m per rad/s of slip for
+#: table_8_1's wheels; RK4 at 1 ms takes its rate 1/LOCK_TIME_S without sub-steps).
+LOCK_TIME_S = 1.0e-3
+
 # Output slots of the per-call auxiliary array (filled by the kernels, used by outputs()).
 _AUX_FZ = 0
 _AUX_ALPHA = 4
@@ -321,7 +371,8 @@ _AUX_DELTA_R = 25
 _AUX_AX = 26
 _AUX_AY = 27
 _AUX_RATE = 28
-N_AUX = 29
+_AUX_DRIVE = 29
+N_AUX = 33
 
 
 class Aux(NamedTuple):
@@ -339,6 +390,8 @@ class Aux(NamedTuple):
     slip_rate_per_s : float
         Rate of the fastest slip mode (wheel spin or tire lag) at this state, 1/s: sets the
         number of sub-steps of a step (:func:`substeps`).
+    drive_nm : numpy.ndarray
+        Drive torque each wheel gets from its axle's differential, N m.
     """
 
     fz_n: np.ndarray
@@ -352,6 +405,7 @@ class Aux(NamedTuple):
     ax_mps2: float
     ay_mps2: float
     slip_rate_per_s: float
+    drive_nm: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -497,6 +551,22 @@ def params_for(vehicle: Vehicle, tire: str | None = None, *,
     if not (math.isfinite(v_min_mps) and v_min_mps > 0.0):
         raise ParameterError("v_min_mps", f"must be finite and > 0, got {v_min_mps!r}")
     arr[P.V_MIN] = v_min_mps
+    ae = vehicle.aero
+    if ae is not None:
+        arr[P.DRAG] = ae.drag_coefficient_kg_per_m
+        lift_f, lift_r = ae.lift_coefficients_kg_per_m()
+        arr[P.LIFT_F] = 0.5 * lift_f  # per wheel: half the axle's
+        arr[P.LIFT_R] = 0.5 * lift_r
+    dl = vehicle.driveline
+    if dl is not None:
+        for axle, visc, bias in (("front", P.VISC_F, P.BIAS_F), ("rear", P.VISC_R, P.BIAS_R)):
+            kind = getattr(dl, f"differential_{axle}")
+            if kind == "locked":
+                arr[visc] = bd.wheel_spin_inertia_kgm2 / (2.0 * LOCK_TIME_S)
+            elif kind == "limited_slip":
+                arr[visc] = getattr(dl, f"viscous_coupling_{axle}_nms_per_rad")
+                tbr = getattr(dl, f"torque_bias_ratio_{axle}")
+                arr[bias] = (tbr - 1.0) / (tbr + 1.0)
     ratio = vehicle.steering.ratio if vehicle.steering is not None else 1.0
     if free_steering:
         _steering_parameters(arr, vehicle, module, coeffs_f)
@@ -695,10 +765,15 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     delta_r = u[I.DELTA_R] + q[P.EPS_R] * phi
     delta = np.array([delta_f, delta_f, delta_r, delta_r])
 
-    # normal loads: static + longitudinal + lateral transfer (Figures 8.3, 8.4)
+    # aerodynamic drag (N, along -x at the CG height) and lift per wheel (N)
+    drag = q[P.DRAG] * U * abs(U)
+    lift = np.array([q[P.LIFT_F], q[P.LIFT_F], q[P.LIFT_R], q[P.LIFT_R]]) * (U * U)
+
+    # normal loads: static less lift, + longitudinal + lateral transfer (Figures 8.3, 8.4);
+    # the forces at the ground sum to m ax + drag
     ax_lt, ay_lt = x[S.AX_LT], x[S.AY_LT]
-    static = m * g / (2.0 * L) * np.array([b, b, a, a])
-    d_long = m * ax_lt * q[P.H_CG] / L
+    static = m * g / (2.0 * L) * np.array([b, b, a, a]) - lift
+    d_long = (m * ax_lt + drag) * q[P.H_CG] / L
     m_front, m_rear = m * b / L, m * a / L
     d_lat_f = (q[P.K_PHI_F] * phi + q[P.C_PHI_F] * pr
                + m_front * (ms / m) * q[P.H_RC_F] * ay_lt
@@ -754,11 +829,20 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
     rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
     rhs_l = msh * c * U * r + msh * g * s - k_phi * phi - c_phi * pr
     vd, rd, pd = _solve_body(m, msh * c, q[P.IZ], q[P.IXZ], q[P.IX], rhs_y, sum_n, rhs_l)
-    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
+    ud = (sum_fx - drag + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) / m
 
-    # wheel spin (8.5-8.8) with stick-slip brake and rolling-resistance friction
+    # the differentials' locking torques (faster wheel to slower), then wheel spin (8.5-8.8)
+    # with stick-slip brake and rolling-resistance friction
+    drive = u[I.DRIVE_FL:I.DRIVE_RR + 1].astype(float)
+    for left, visc, bias in ((0, q[P.VISC_F], q[P.BIAS_F]), (2, q[P.VISC_R], q[P.BIAS_R])):
+        dw = omega[left] - omega[left + 1]
+        t_axle = abs(drive[left] + drive[left + 1])
+        lock = visc * dw + 0.5 * bias * t_axle * min(max(dw / BIAS_BAND_RADPS, -1.0), 1.0)
+        slip_rate = max(slip_rate, (2.0 * visc + bias * t_axle / BIAS_BAND_RADPS) / iw)
+        drive[left] -= lock
+        drive[left + 1] += lock
     cap = np.maximum(u[I.BRAKE_FL:I.BRAKE_RR + 1], 0.0) + q[P.F_RR] * fz * rw
-    t_other = u[I.DRIVE_FL:I.DRIVE_RR + 1] - rw * fx
+    t_other = drive - rw * fx
     sliding = iw * np.abs(omega) >= cap * q[P.TAU_B]
     held = ~sliding & (np.abs(t_other) <= cap)
     with np.errstate(divide="ignore", invalid="ignore"):  # cap > 0 wherever 'held'
@@ -787,7 +871,7 @@ def evaluate(t: float, x: np.ndarray, u: np.ndarray, p: Params) -> tuple[np.ndar
         dx[S.DELTA_S], dx[S.DELTA_S_RATE] = _steering_rates(
             x[S.DELTA_S_RATE], u[I.STEER_TORQUE], fy[:2], mz[:2], q)
     aux = Aux(fz, alpha_tire.copy(), kappa, fx, fy, mz, float(delta_f), float(delta_r),
-              float(ax), float(ay), slip_rate)
+              float(ax), float(ay), float(slip_rate), drive)
     return dx, aux
 
 
@@ -892,4 +976,5 @@ def aux_from_array(aux: np.ndarray) -> Aux:
                aux[_AUX_KAPPA:_AUX_KAPPA + 4].copy(), aux[_AUX_FX:_AUX_FX + 4].copy(),
                aux[_AUX_FY:_AUX_FY + 4].copy(), aux[_AUX_MZ:_AUX_MZ + 4].copy(),
                float(aux[_AUX_DELTA_F]), float(aux[_AUX_DELTA_R]), float(aux[_AUX_AX]),
-               float(aux[_AUX_AY]), float(aux[_AUX_RATE]))
+               float(aux[_AUX_AY]), float(aux[_AUX_RATE]),
+               aux[_AUX_DRIVE:_AUX_DRIVE + 4].copy())

@@ -12,7 +12,8 @@ The equations, once
 Each piece of the model is one function of plain numbers, without branches and without any
 memory layout: :func:`_wheel_loads` (normal loads), :func:`_corner_slip` (a corner's wheel
 kinematics, slips and slip lag), :func:`_corner_spin` (its forces in the body frame, their
-moment and the wheel's spin equation), :func:`_body_rates` (the body's equations of motion,
+moment and the wheel's spin equation), :func:`_differential` (an axle's differential: the
+locking torque between its wheels), :func:`_body_rates` (the body's equations of motion,
 pose and load-transfer lag). Between a corner's slip and spin comes its tire. Two right-hand
 sides call them, differing only in where the numbers are stored:
 
@@ -59,8 +60,9 @@ from typing import Any
 import numpy as np
 
 from fourws_sim.models.eightdof import (_AUX_ALPHA, _AUX_AX, _AUX_AY, _AUX_DELTA_F,
-                                        _AUX_DELTA_R, _AUX_FX, _AUX_FY, _AUX_FZ, _AUX_KAPPA,
-                                        _AUX_MZ, _AUX_RATE, EULER_RATE_BOUND,
+                                        _AUX_DELTA_R, _AUX_DRIVE, _AUX_FX, _AUX_FY, _AUX_FZ,
+                                        _AUX_KAPPA, _AUX_MZ, _AUX_RATE, BIAS_BAND_RADPS,
+                                        EULER_RATE_BOUND,
                                         HELD_SPIN_FLOOR_RADPS, INPUT, MAX_SUBSTEPS, N_AUX,
                                         N_INPUT, N_STATE, PARAM, RK4_RATE_BOUND, STATE)
 from fourws_sim.models import eightdof
@@ -116,6 +118,11 @@ k_tlt, k_tb, k_g, k_kspin = int(PARAM.TAU_LT), int(PARAM.TAU_B), int(PARAM.G), i
 k_sfree, k_js, k_nus, k_es = (int(PARAM.STEER_FREE), int(PARAM.J_S), int(PARAM.NU_S),
                               int(PARAM.E_S))
 k_tcs, k_ns, k_rates = int(PARAM.TC_S), int(PARAM.N_S), int(PARAM.RATE_S)
+k_drag, k_liftf, k_liftr = int(PARAM.DRAG), int(PARAM.LIFT_F), int(PARAM.LIFT_R)
+k_viscf, k_viscr, k_biasf, k_biasr = (int(PARAM.VISC_F), int(PARAM.VISC_R), int(PARAM.BIAS_F),
+                                      int(PARAM.BIAS_R))
+a_drive = _AUX_DRIVE
+INV_BIAS_BAND = 1.0 / float(BIAS_BAND_RADPS)
 a_fz, a_al, a_ka, a_fx, a_fy, a_mz = _AUX_FZ, _AUX_ALPHA, _AUX_KAPPA, _AUX_FX, _AUX_FY, _AUX_MZ
 HELD_FLOOR = float(HELD_SPIN_FLOOR_RADPS)
 a_df, a_dr, a_ax, a_ay, a_rate = _AUX_DELTA_F, _AUX_DELTA_R, _AUX_AX, _AUX_AY, _AUX_RATE
@@ -189,16 +196,22 @@ N_PT = _P_INV_SIGMA_R + 1
 # ------------------------------------------------------------------------------ equations
 # Plain numbers in, plain numbers out: no branch, no array (see the module docstring).
 
-def _wheel_loads(phi, pr, ax_lt, ay_lt, half_m, h_cg, inv_l,  # type: ignore
+def _wheel_loads(phi, pr, U, ax_lt, ay_lt, half_m, h_cg, inv_l,  # type: ignore
                  k_phi_f, c_phi_f, rc_f, hu_f, inv_tf, k_phi_r, c_phi_r, rc_r, hu_r, inv_tr,
-                 static_f, static_r):
-    """Normal loads FL, FR, RL, RR (N, before the clamp at 0): static, longitudinal and
-    lateral transfer (Figures 8.3, 8.4) from the roll state and the lagged accelerations."""
-    d_long = half_m * ax_lt * h_cg * inv_l
+                 static_f, static_r, drag, lift_f, lift_r):
+    """Normal loads FL, FR, RL, RR (N, before the clamp at 0): static less the aerodynamic
+    lift (``lift_f``, ``lift_r`` per wheel and U^2, kg/m), longitudinal transfer of the
+    forces at the ground (``m ax + drag``, ``drag`` per U|U| in kg/m) and lateral transfer
+    (Figures 8.3, 8.4) from the roll state and the lagged accelerations. With ``drag``,
+    ``lift_f``, ``lift_r`` zero the numbers are those without them, bit for bit."""
+    d_long = (half_m * ax_lt + 0.5 * drag * (U * abs(U))) * h_cg * inv_l
     d_lat_f = (k_phi_f * phi + c_phi_f * pr + rc_f * ay_lt + hu_f * ay_lt) * inv_tf
     d_lat_r = (k_phi_r * phi + c_phi_r * pr + rc_r * ay_lt + hu_r * ay_lt) * inv_tr
-    return ((static_f - d_long) - d_lat_f, (static_f - d_long) + d_lat_f,
-            (static_r + d_long) - d_lat_r, (static_r + d_long) + d_lat_r)
+    uu = U * U
+    load_f = static_f - lift_f * uu
+    load_r = static_r - lift_r * uu
+    return ((load_f - d_long) - d_lat_f, (load_f - d_long) + d_lat_f,
+            (load_r + d_long) - d_lat_r, (load_r + d_long) + d_lat_r)
 
 
 def _corner_slip(fz, U, V, r, xw, yw, cd, sd, omega, alpha_lag,  # type: ignore
@@ -252,13 +265,31 @@ def _corner_spin(fx, fy, mz, fz, omega, xw, yw, cd, sd, drive, brake,  # type: i
     return fxb, fyb, moment, d_omega
 
 
+def _differential(drive_l, drive_r, omega_l, omega_r, visc, bias,  # type: ignore
+                  inv_iw, rate):
+    """An axle's differential (eightdof docstring): the drive torques ``drive_l, drive_r``
+    (N m, the open split) less and plus the locking torque of the viscous coupling ``visc``
+    (N m s/rad) and the torque bias ``bias`` ((TBR - 1)/(TBR + 1)) at the wheel speeds
+    ``omega_l, omega_r`` (rad/s). Returns the two wheels' torques and the larger of ``rate``
+    and the coupling's rate (1/s). With ``visc`` and ``bias`` 0 the torques are unchanged."""
+    dw = omega_l - omega_r
+    s = dw * INV_BIAS_BAND
+    s = 1.0 if s > 1.0 else (-1.0 if s < -1.0 else s)
+    t_axle = abs(drive_l + drive_r)
+    lock = visc * dw + 0.5 * bias * t_axle * s
+    coupling = (2.0 * visc + bias * t_axle * INV_BIAS_BAND) * inv_iw
+    rate = coupling if coupling > rate else rate
+    return drive_l - lock, drive_r + lock, rate
+
+
 def _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, psi,  # type: ignore
                 ax_lt, ay_lt, m, ix, ixz, msh, msh_g, k_phi, c_phi, ixz2, inv_m, inv_iz,
-                inv_tlt):
+                inv_tlt, drag):
     """The body's equations of motion (eqs. 8.1-8.4, 8.14: the 3x3 system in V', r', p'
     solved in closed form, then U'), the pose rates (8.15-8.17) and the lag of the
-    load-transfer accelerations, from the summed forces ``sum_fx, sum_fy`` (N) and yaw
-    moment ``sum_n`` (N m). Returns ``(U', V', r', p', ax, ay, X', Y', ax_lt', ay_lt')``."""
+    load-transfer accelerations, from the summed tire forces ``sum_fx, sum_fy`` (N) and yaw
+    moment ``sum_n`` (N m) and the aerodynamic drag ``drag`` U|U| (``drag`` in kg/m, along
+    -x at the CG). Returns ``(U', V', r', p', ax, ay, X', Y', ax_lt', ay_lt')``."""
     s, c = sincos(phi)
     mshc = msh * c
     rhs_y = sum_fy - m * U * r - msh * s * (pr * pr + r * r)
@@ -267,7 +298,7 @@ def _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, psi,  # type: ignore
     pd = (rhs_l + mshc * rhs_y * inv_m + ixz * sum_n * inv_iz) / det
     vd = (rhs_y + mshc * pd) * inv_m
     rd = (sum_n + ixz * pd) * inv_iz
-    ud = (sum_fx + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
+    ud = (sum_fx - drag * (U * abs(U)) + m * V * r - msh * (s * rd + 2.0 * r * pr * c)) * inv_m
     ax = ud - V * r
     ay = vd + U * r
     sps, cps = sincos(psi)
@@ -279,6 +310,7 @@ _wheel_loads = _jit_inline(_wheel_loads)
 _corner_slip = _jit_inline(_corner_slip)
 _corner_spin = _jit_inline(_corner_spin)
 _body_rates = _jit_inline(_body_rates)
+_differential = _jit_inline(_differential)
 
 
 # ------------------------------------------------------------------------------ scalar
@@ -343,9 +375,9 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
     ax_lt = x[i_ax]
     ay_lt = x[i_ay]
     aux[a_fz], aux[a_fz + 1], aux[a_fz + 2], aux[a_fz + 3] = _wheel_loads(
-        phi, pr, ax_lt, ay_lt, pt[_P_HALF_M], q[k_hcg], pt[_P_INV_L], q[k_kf], q[k_cf],
+        phi, pr, U, ax_lt, ay_lt, pt[_P_HALF_M], q[k_hcg], pt[_P_INV_L], q[k_kf], q[k_cf],
         pt[_P_RCF], pt[_P_HUF], pt[_P_INV_TF], q[k_kr], q[k_cr], pt[_P_RCR], pt[_P_HUR],
-        pt[_P_INV_TR], pt[_P_STF], pt[_P_STR])
+        pt[_P_INV_TR], pt[_P_STF], pt[_P_STR], q[k_drag], q[k_liftf], q[k_liftr])
     sdf, cdf = sincos(delta_f)
     sdr, cdr = sincos(delta_r)
     rate = 0.0  # fastest slip mode, 1/s (sets the integrators' sub-steps)
@@ -359,6 +391,11 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
                               x[i_al0 + i], pt[_P_INV_SIGMA_F] if i < 2 else pt[_P_INV_SIGMA_R],
                               rw, q[k_vmin], q[k_kspin], rate)
         dx[i_w0 + i] = avx  # scratch until the spin equations below overwrite it
+    inv_iw = pt[_P_INV_IW]
+    aux[a_drive], aux[a_drive + 1], rate = _differential(
+        u[j_d0], u[j_d0 + 1], x[i_w0], x[i_w0 + 1], q[k_viscf], q[k_biasf], inv_iw, rate)
+    aux[a_drive + 2], aux[a_drive + 3], rate = _differential(
+        u[j_d0 + 2], u[j_d0 + 3], x[i_w0 + 2], x[i_w0 + 3], q[k_viscr], q[k_biasr], inv_iw, rate)
     mu = q[k_mu]
     if HAS_FORCES4:
         _forces4(aux[a_fz:a_fz + 4], aux[a_al:a_al + 4], aux[a_ka:a_ka + 4],
@@ -379,7 +416,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
         xw, yw, cd, sd = _corner_geometry(i, a, b, tf, tr, cdf, sdf, cdr, sdr)
         fxb, fyb, moment, dx[i_w0 + i] = _corner_spin(
             aux[a_fx + i], aux[a_fy + i], aux[a_mz + i], aux[a_fz + i], x[i_w0 + i], xw, yw,
-            cd, sd, u[j_d0 + i], u[j_b0 + i], rw, q[k_iw], pt[_P_INV_IW], q[k_tb], q[k_frr])
+            cd, sd, aux[a_drive + i], u[j_b0 + i], rw, q[k_iw], inv_iw, q[k_tb], q[k_frr])
         sum_fx += fxb
         sum_fy += fyb
         sum_n += moment
@@ -394,7 +431,7 @@ def _rhs_terms(x, u, q, pt, cf, cr, dx, aux):  # type: ignore[no-untyped-def]
      dx[i_ay]) = _body_rates(sum_fx, sum_fy, sum_n, U, V, r, phi, pr, x[i_psi], ax_lt, ay_lt,
                              q[k_m], q[k_ix], q[k_ixz], pt[_P_MSH], pt[_P_MSHG], pt[_P_KPHI],
                              pt[_P_CPHI], pt[_P_IXZ2], pt[_P_INV_M], pt[_P_INV_IZ],
-                             pt[_P_INV_TLT])
+                             pt[_P_INV_TLT], q[k_drag])
     dx[i_phi] = pr
     dx[i_psi] = r
     aux[a_df] = delta_f
@@ -643,10 +680,11 @@ _forces_lane = _jit_inline(getattr(_TIRE_MODULE, "forces_lane", _lanes_unavailab
 
 
 def _lane_corner(IN, OUT, cbase, ln, i, xw, yw, cd, sd, fz, inv_sigma,  # type: ignore
-                 U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate):
+                 U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, drive, rate):
     """Corner ``i`` of lane ``ln`` in :func:`_rhs_lanes`: :func:`_corner_slip`, the tire's
-    ``forces_lane``, :func:`_corner_spin`; writes its slip-lag and spin derivatives and
-    returns ``(fxb, fyb, moment about the CG, rate)``."""
+    ``forces_lane``, :func:`_corner_spin` with the drive torque ``drive`` its differential
+    gives it; writes its slip-lag and spin derivatives and returns
+    ``(fxb, fyb, moment about the CG, rate)``."""
     om = IN[(R_X + i_w0 + i) * LANES + ln]
     fz, alpha_t, kappa, _avx, d_alpha, rate = _corner_slip(
         fz, U_, V, r, xw, yw, cd, sd, om, IN[(R_X + i_al0 + i) * LANES + ln], inv_sigma, rw,
@@ -654,8 +692,8 @@ def _lane_corner(IN, OUT, cbase, ln, i, xw, yw, cd, sd, fz, inv_sigma,  # type: 
     OUT[(R_DX + i_al0 + i) * LANES + ln] = d_alpha
     fx, fy, mz = _forces_lane(fz, alpha_t, kappa, mu, IN, cbase, ln)
     fxb, fyb, moment, OUT[(R_DX + i_w0 + i) * LANES + ln] = _corner_spin(
-        fx, fy, mz, fz, om, xw, yw, cd, sd, IN[(R_U + j_d0 + i) * LANES + ln],
-        IN[(R_U + j_b0 + i) * LANES + ln], rw, iw, inv_iw, tb, frr)
+        fx, fy, mz, fz, om, xw, yw, cd, sd, drive, IN[(R_U + j_b0 + i) * LANES + ln], rw, iw,
+        inv_iw, tb, frr)
     return fxb, fyb, moment, rate
 
 
@@ -687,42 +725,52 @@ def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
         delta_f = IN[(R_U + j_df) * LANES + ln] + IN[(R_Q + k_ef) * LANES + ln] * phi
         delta_r = IN[(R_U + j_dr) * LANES + ln] + IN[(R_Q + k_er) * LANES + ln] * phi
         fz_fl, fz_fr, fz_rl, fz_rr = _wheel_loads(
-            phi, pr, ax_lt, ay_lt, IN[(R_PT + _P_HALF_M) * LANES + ln],
+            phi, pr, U_, ax_lt, ay_lt, IN[(R_PT + _P_HALF_M) * LANES + ln],
             IN[(R_Q + k_hcg) * LANES + ln], IN[(R_PT + _P_INV_L) * LANES + ln],
             IN[(R_Q + k_kf) * LANES + ln], IN[(R_Q + k_cf) * LANES + ln],
             IN[(R_PT + _P_RCF) * LANES + ln], IN[(R_PT + _P_HUF) * LANES + ln],
             IN[(R_PT + _P_INV_TF) * LANES + ln], IN[(R_Q + k_kr) * LANES + ln],
             IN[(R_Q + k_cr) * LANES + ln], IN[(R_PT + _P_RCR) * LANES + ln],
             IN[(R_PT + _P_HUR) * LANES + ln], IN[(R_PT + _P_INV_TR) * LANES + ln],
-            IN[(R_PT + _P_STF) * LANES + ln], IN[(R_PT + _P_STR) * LANES + ln])
+            IN[(R_PT + _P_STF) * LANES + ln], IN[(R_PT + _P_STR) * LANES + ln],
+            IN[(R_Q + k_drag) * LANES + ln], IN[(R_Q + k_liftf) * LANES + ln],
+            IN[(R_Q + k_liftr) * LANES + ln])
         sdf, cdf = sincos(delta_f)
         sdr, cdr = sincos(delta_r)
         sig_f = IN[(R_PT + _P_INV_SIGMA_F) * LANES + ln]
         sig_r = IN[(R_PT + _P_INV_SIGMA_R) * LANES + ln]
         ywf = 0.5 * IN[(R_Q + k_tf) * LANES + ln]
         ywr = 0.5 * IN[(R_Q + k_tr) * LANES + ln]
+        dr_fl, dr_fr, rate = _differential(
+            IN[(R_U + j_d0) * LANES + ln], IN[(R_U + j_d0 + 1) * LANES + ln],
+            IN[(R_X + i_w0) * LANES + ln], IN[(R_X + i_w0 + 1) * LANES + ln],
+            IN[(R_Q + k_viscf) * LANES + ln], IN[(R_Q + k_biasf) * LANES + ln], inv_iw, 0.0)
+        dr_rl, dr_rr, rate = _differential(
+            IN[(R_U + j_d0 + 2) * LANES + ln], IN[(R_U + j_d0 + 3) * LANES + ln],
+            IN[(R_X + i_w0 + 2) * LANES + ln], IN[(R_X + i_w0 + 3) * LANES + ln],
+            IN[(R_Q + k_viscr) * LANES + ln], IN[(R_Q + k_biasr) * LANES + ln], inv_iw, rate)
         # the four corners in order (FL, FR, RL, RR), summed in wheel order as ``rhs``
         fxb, fyb, mom, rate = _lane_corner(
             IN, OUT, R_CF, ln, 0, a, ywf, cdf, sdf, fz_fl, sig_f,
-            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, 0.0)
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, dr_fl, rate)
         sum_fx = 0.0 + fxb
         sum_fy = 0.0 + fyb
         sum_n = 0.0 + mom
         fxb, fyb, mom, rate = _lane_corner(
             IN, OUT, R_CF, ln, 1, a, -ywf, cdf, sdf, fz_fr, sig_f,
-            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, dr_fr, rate)
         sum_fx += fxb
         sum_fy += fyb
         sum_n += mom
         fxb, fyb, mom, rate = _lane_corner(
             IN, OUT, R_CR, ln, 2, -b, ywr, cdr, sdr, fz_rl, sig_r,
-            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, dr_rl, rate)
         sum_fx += fxb
         sum_fy += fyb
         sum_n += mom
         fxb, fyb, mom, rate = _lane_corner(
             IN, OUT, R_CR, ln, 3, -b, -ywr, cdr, sdr, fz_rr, sig_r,
-            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, rate)
+            U_, V, r, rw, iw, inv_iw, vmin, k_spin, mu, tb, frr, dr_rr, rate)
         sum_fx += fxb
         sum_fy += fyb
         sum_n += mom
@@ -735,7 +783,7 @@ def _rhs_lanes(IN, OUT):  # type: ignore[no-untyped-def]
             IN[(R_PT + _P_MSHG) * LANES + ln], IN[(R_PT + _P_KPHI) * LANES + ln],
             IN[(R_PT + _P_CPHI) * LANES + ln], IN[(R_PT + _P_IXZ2) * LANES + ln],
             IN[(R_PT + _P_INV_M) * LANES + ln], IN[(R_PT + _P_INV_IZ) * LANES + ln],
-            IN[(R_PT + _P_INV_TLT) * LANES + ln])
+            IN[(R_PT + _P_INV_TLT) * LANES + ln], IN[(R_Q + k_drag) * LANES + ln])
         OUT[(R_DX + i_u) * LANES + ln] = ud
         OUT[(R_DX + i_v) * LANES + ln] = vd
         OUT[(R_DX + i_r) * LANES + ln] = rd
