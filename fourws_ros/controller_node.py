@@ -59,6 +59,7 @@ from rclpy.node import Node
 
 from fourws_control import RearSteerActuator, available_laws, make_loop_law
 from fourws_ros import conversions, peers, reporting, topics
+from fourws_ros.identity import PublisherNames, RunNodeFilter, drain
 from fourws_ros.runtime import EXIT_PEERS, run_node
 from fourws_run import codecs
 from fourws_run.ticks import StateGate, law_input
@@ -80,6 +81,10 @@ def _float_range(lo: float, hi: float) -> list[FloatingPointRange]:
 
 class ControllerNode(Node):
     """Rear-steer controller (see module docstring)."""
+
+    #: Driver inputs are taken from the run's maneuver node only, told by the publisher of
+    #: each message (rclpy message info: the single-threaded executor, fourws_ros.runtime).
+    needs_message_info = True
 
     def __init__(self, node_name: str = "fourws_controller") -> None:
         super().__init__(node_name)
@@ -128,6 +133,11 @@ class ControllerNode(Node):
             description="lockstep | realtime", read_only=True))
         self.declare_parameter("exit_when_done", True, ParameterDescriptor(
             description="exit once the simulator's final status arrived and all is delivered"))
+        self.declare_parameter("maneuver_node", topics.NODE_NAMES[topics.Role.MANEUVER],
+                               ParameterDescriptor(
+            description="the run's driver node: driver inputs of any other publisher are "
+                        "refused (a foreign one on the state's stamp would be the law's "
+                        "feed-forward)", read_only=True))
         self.declare_parameter("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
             description="wall time to wait for the simulator's states before giving up with "
                         "a line naming what is missing, s (0: wait forever)", read_only=True,
@@ -163,8 +173,12 @@ class ControllerNode(Node):
                                              self._on_state, topics.STREAM_QOS, raw=True)
         self.peers = peers.PeerWatch(self, float(self.get_parameter("startup_timeout_s").value))
         self.peers.need_publishers(state_sub, topics.STATE)
-        self.create_subscription(topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
-                                 self._on_driver, topics.STREAM_QOS, raw=True)
+        self._run_nodes = RunNodeFilter(
+            PublisherNames(self), lambda role_param: str(self.get_parameter(role_param).value),
+            self._refuse_foreign)
+        self._driver_sub = self.create_subscription(
+            topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
+            self._on_driver_from, topics.STREAM_QOS, raw=True)
         self._cmd_encoder = codecs.RearSteerCommandEncoder(topics.FRAME_BODY)
         # admitted states not answered yet, in order: stamp ns -> (state, wall time received)
         self._states: collections.OrderedDict[int, tuple[dict[str, Any], float]] = \
@@ -309,6 +323,21 @@ class ControllerNode(Node):
         self._states[state["stamp_ns"]] = (state, time.monotonic())
         self._try_answer(fallback=False)
 
+    def _on_driver_from(self, raw: bytes, info: Any) -> None:
+        self._offer_driver(raw, info)
+        # the rest of the queue at once: a foreign flood on the topic would otherwise hold the
+        # run's own input behind thousands of messages, one executor wake-up each
+        drain(self._driver_sub, topics.message_class(topics.DRIVER_INPUT), True,
+              self._offer_driver, topics.STREAM_DEPTH)
+
+    def _offer_driver(self, raw: bytes, info: Any) -> None:
+        self._run_nodes.offer(topics.DRIVER_INPUT, info, "maneuver_node", raw, self._on_driver)
+
+    def _refuse_foreign(self, topic: str, detail: str) -> None:
+        self.gate.rejections.add(topic, "not from the run's node", detail)
+        self.get_logger().warning(f"refused a {topic} message: not from the run's node "
+                                  f"({detail})", throttle_duration_sec=1.0)
+
     def _on_driver(self, raw: bytes) -> None:
         try:
             key, cmd = codecs.parse_driver_input(raw)
@@ -330,6 +359,7 @@ class ControllerNode(Node):
         self._try_answer(fallback=False)
 
     def _check_wait(self) -> None:
+        self._run_nodes.poll()
         if self._states:
             self._try_answer(fallback=False)  # held until the publishers matched
         if self._sim_ended or self._closing:

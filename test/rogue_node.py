@@ -12,7 +12,9 @@ Run as ``python rogue_node.py KIND SECONDS`` on the run's ROS domain; ``KIND``:
   command (a second publisher where one is expected);
 * ``done`` -- from the run's 200th state on, a ``done`` maneuver status stamped with each
   state (as the maneuver node ends a run);
-* ``clock`` -- copies of the run's states, one step ahead of each (on the run's clock).
+* ``clock`` -- copies of the run's states, one step ahead of each (on the run's clock);
+* ``driver_grid`` -- 100 rad driver inputs stamped on the run's control grid (every 10 ms of
+  the first 60 s, cycling), so some carry the stamp of a state the run is answering.
 """
 
 from __future__ import annotations
@@ -80,12 +82,20 @@ def main(kind: str, seconds: float) -> int:
             pubs[topics.STATE].publish(state)
             sent += 1
         node.create_subscription(msg(topics.STATE), topics.STATE, ahead, topics.STREAM_QOS)
+    elif kind == "driver_grid":
+        k = 0
+        while time.monotonic() < end:
+            k += 1
+            pubs[topics.DRIVER_INPUT].publish(
+                conversions.driver_msg(DriverCommand(1600.0, 100.0), 0.01 * (k % 6000)))
+            sent += 1
+            time.sleep(0.0005)
     if kind in ("mimic", "done", "clock"):
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         while time.monotonic() < end:
             executor.spin_once(timeout_sec=0.05)
-    else:
+    elif kind != "driver_grid":
         k = 0
         while time.monotonic() < end:
             k += 1

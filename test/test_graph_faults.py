@@ -116,6 +116,37 @@ def test_rogue_garbage_is_refused_counted_and_the_run_is_exact(tmp_path, user_do
                for k in refused), refused
 
 
+def test_rogue_driver_inputs_on_the_runs_grid_never_reach_the_law(tmp_path, user_domain):
+    """A foreign node sends 100 rad driver inputs stamped on the run's control grid, so
+    some carry the stamp of a state before the maneuver's input for it arrives (before, the
+    controller kept them and took the first of a stamp as the law's feed-forward: the car
+    spun at t = 15 s of a run whose twin completes). The controller takes driver inputs of
+    the run's maneuver node only: every recorded state and command equals the twin's bit for
+    bit, and the controller's log names the refused publisher. The simulator, which in
+    lockstep cannot tell publishers apart, counts the rogue's inputs that reach it for a state
+    already answered as second answers: the run is ok, or fails saying a second publisher
+    answered -- never a plausible other result."""
+    sc = _scenario(40.0)
+    rogue = _start_rogue("driver_grid", 120.0)
+    try:
+        run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
+                                  run_name="rogue_driver")
+    finally:
+        os.killpg(rogue.pid, signal.SIGTERM)
+        rogue_out = _stop(rogue)
+    assert "sent 0 messages" not in rogue_out, rogue_out
+    assert run.ok or run.reason.startswith("a second publisher answered"), run.reason
+    ref = run_scenario(sc, "sol1")
+    bag = load_bag(run.bag_path)
+    n = ref.time_s.size
+    state, cmd = bag.topics[topics.STATE], bag.topics[topics.REAR_STEER_CMD]
+    assert len(state) == n + 1 and len(cmd) == n
+    np.testing.assert_array_equal(state.fields["yaw_rate_radps"][:n], ref["yaw_rate_radps"])
+    np.testing.assert_array_equal(cmd.fields["angle_rad"], ref.rear_angle_rad)
+    log = (run.run_dir / "logs" / "fourws_controller.log").read_text()
+    assert "not from the run's node (publisher rogue)" in log, log[-2000:]
+
+
 def test_a_second_answering_publisher_fails_the_run_loudly(tmp_path, user_domain):
     """A foreign node that answers every state with a plausible driver input and command: the
     run cannot tell whose answer came first, so it must not pass as ok; the reason names the
