@@ -41,7 +41,7 @@ from fourws_run.bagfile import BagError, read_bag, verify_bag
 from fourws_run.codecs import CodecError, parse_rear_steer_command
 from fourws_run.config import USER_LAW, RunConfig
 from fourws_run.record import Outcome, RunRecord
-from fourws_run.verdict import BagCheck, conclude
+from fourws_run.verdict import RECORDER_LATE, BagCheck, conclude
 from fourws_sim.errors import FourwsError
 
 Role = topics.Role
@@ -469,8 +469,8 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
                 if left:
                     detail = (state.recorder.detail if state.recorder is not None
                               else "no recorder status")
-                    failure = (f"the recorder did not hold every message {RECORDER_GRACE_S:.0f}"
-                               f" s after the simulation ended ({detail})")
+                    failure = (f"{RECORDER_LATE} {RECORDER_GRACE_S:.0f} s after the "
+                               f"simulation ended ({detail})")
             # the controller is stopped once the recorder has its messages (a user's own may
             # never exit by itself)
             if config.controller.builtin:

@@ -121,6 +121,16 @@ def _flooders(account: RunAccount | None) -> str:
     return "; foreign messages: " + ", ".join(f"{n} on {what}" for what, n in top)
 
 
+#: How the launcher's failure begins when the recorder never held every message.
+RECORDER_LATE = "the recorder did not hold every message"
+
+
+def _second_answers(ambiguous: dict[str, int]) -> str:
+    return ("a second publisher answered states of this run ("
+            + "; ".join(f"{n}x {k}" for k, n in ambiguous.items())
+            + "): the inputs applied are not certain")
+
+
 def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
              man: ManeuverReport | None, interrupted: bool, failure: str,
              bag: BagCheck | None) -> None:
@@ -154,12 +164,16 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
         record.outcome = Outcome.INTERRUPTED
         record.reason = "interrupted (Ctrl-C / SIGTERM)"
         return
+    ambiguous = {k: n for k, n in record.rejections.items() if SECOND_ANSWER in k}
     if failure:
         record.outcome = Outcome.FAILED
+        if ambiguous and failure.startswith(RECORDER_LATE):
+            # a foreign answer the simulator applied is counted as applied but, foreign, never
+            # stored: the recorder cannot complete, because a second publisher answered
+            record.reason = _second_answers(ambiguous) + f"; then: {failure}"
         return
     assert sim is not None and sim.final
     end = sim.end_reason
-    ambiguous = {k: n for k, n in record.rejections.items() if SECOND_ANSWER in k}
     # states refused for not continuing the run although they were on its clock: a second
     # publisher sends states of this run, and the nodes cannot tell which one they answered
     doubled = {k: n for k, n in record.rejections.items() if k.startswith(man_name) and (
@@ -184,9 +198,7 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
                          + _flooders(record.account))
     elif ambiguous:
         record.outcome = Outcome.FAILED
-        record.reason = ("a second publisher answered states of this run ("
-                         + "; ".join(f"{n}x {k}" for k, n in ambiguous.items())
-                         + "): the inputs applied are not certain")
+        record.reason = _second_answers(ambiguous)
     elif controller:
         record.outcome = Outcome.FAILED
         record.reason = controller
@@ -223,4 +235,5 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
         record.reason = end
 
 
-__all__ = ["BagCheck", "ManeuverReport", "SimReport", "UNUSABLE_COMMAND", "conclude"]
+__all__ = ["BagCheck", "ManeuverReport", "RECORDER_LATE", "SimReport", "UNUSABLE_COMMAND",
+           "conclude"]

@@ -198,3 +198,23 @@ def test_a_failed_run_never_says_recording_complete(tmp_path):
     text = "\n".join(rec.summary_lines())
     assert rec.outcome == Outcome.FAILED and "recording: complete" not in text
     assert "holds every message the nodes published before the run stopped" in text
+
+
+def test_a_recorder_that_never_completes_for_a_second_publisher_names_the_publisher(tmp_path):
+    """A foreign command the simulator applied (lockstep cannot tell publishers apart) counts
+    as applied, but the recorder, which stores the run's nodes' messages only, never holds it:
+    the launcher fails on the recorder after its grace; the reason names the cause, the second
+    publisher, first (seen: '4000 stored but the simulator applied 4001' was all it said)."""
+    done = ManeuverReport("completed", "completed", True)
+    late = ("the recorder did not hold every message 90 s after the simulation ended "
+            "(/fourws/rear_steer_cmd: 4000 stored but the simulator applied 4001)")
+    rec = _record(tmp_path)
+    conclude(rec, _config(), _sim(rejections={
+        "/fourws/rear_steer_cmd: second answer to one state": 12}), done, False, late, None)
+    assert rec.outcome == Outcome.FAILED
+    assert rec.reason == ("a second publisher answered states of this run (12x "
+                          "fourws_simulator: /fourws/rear_steer_cmd: second answer to one "
+                          "state): the inputs applied are not certain; then: " + late)
+    rec = _record(tmp_path)  # without second answers the recorder's failure stands alone
+    conclude(rec, _config(), _sim(), done, False, late, None)
+    assert rec.outcome == Outcome.FAILED and rec.reason == late
