@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 import yaml
 
-from fourws_run.closed_loop import run_closed_loop
+from compiled_twin import compiled_and_twin
 
 from fourws_sim.drivers import SpeedHoldDriver, SpeedHoldSpec, drive_fractions
 from fourws_sim.errors import ParameterError
@@ -34,7 +34,6 @@ from fourws_sim.models import eightdof
 from fourws_sim.models.eightdof import INPUT, STATE
 from fourws_sim.params import Vehicle, load_vehicle, vehicle_from_mapping
 from fourws_sim.simulator import Inputs, Simulator
-from fourws_study.kernel import build_law, prepare_compiled, run_compiled, run_compiled_block
 from fourws_study.spec import load_study
 
 SPEED_MPS = 20.0
@@ -240,16 +239,7 @@ def test_study_loop_with_a_driveline_equals_the_twin_bit_for_bit(tmp_path: Path,
     spec = load_study(path)
     (point,) = spec.points()
     config = spec.config(point)
-    law = build_law(config)
-    single = run_compiled(config, law)
-    prep = prepare_compiled(config, law)
-    assert not isinstance(single, str) and not isinstance(prep, str)
-    (block,) = run_compiled_block([prep])
-    twin = run_closed_loop(config.vehicle, config.maneuver, config.law, model=config.model,
-                           dt_s=config.integration_step_s,
-                           control_period_s=config.control_period_s,
-                           belief_vehicle=config.belief, integrator=config.integrator,
-                           law_options=config.law_options, tire=config.tire)
+    single, block, twin, _ = compiled_and_twin(config)
     for name in ("speed_mps", "yaw_rate_radps", "lateral_accel_mps2", "roll_rad"):
         assert single.channels[name].tobytes() == twin[name].tobytes(), name
         assert block.channels[name].tobytes() == twin[name].tobytes(), name

@@ -30,12 +30,12 @@ import pytest
 import scipy.stats
 import yaml
 
+from compiled_twin import compiled_and_twin
 from fourws_analysis import linear
 from fourws_analysis.extremes import run_extremes
 from fourws_analysis.lane_change import lane_change_metrics
 from fourws_cli.main import main as fourws_main
 from fourws_control import LAWS, compiled
-from fourws_run.closed_loop import run_closed_loop
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import DoubleLaneChangeParams
 from fourws_sim.outcome import DIVERGED, SPUN
@@ -152,16 +152,8 @@ def test_every_law_and_tire_compiled_equals_the_twin_bit_for_bit(tmp_path, law, 
         config = _case_config(tmp_path, maneuver, law, options, tire)
         built = build_law(config)
         assert compiled.law_kind(built.gain_function().function) is not None
-        single = run_compiled(config, built)
-        prep = prepare_compiled(config, built)
-        assert not isinstance(single, str) and not isinstance(prep, str), (single, prep)
+        single, block, twin, prep = compiled_and_twin(config, built)
         assert prep.lanes == (tire in LANE_TIRES)
-        (block,) = run_compiled_block([prep])
-        twin = run_closed_loop(config.vehicle, config.maneuver, config.law,
-                               model=config.model, dt_s=config.integration_step_s,
-                               control_period_s=config.control_period_s,
-                               belief_vehicle=config.belief, integrator=config.integrator,
-                               law_options=config.law_options, tire=config.tire)
         assert single.time_s.tobytes() == twin.time_s.tobytes()
         assert single.channels.keys() == block.channels.keys()
         for name, values in single.channels.items():
@@ -200,16 +192,7 @@ def test_a_run_past_its_vehicle_limits_ends_at_the_twins_state_bit_for_bit(tmp_p
     word for word, for each limit (sideslip and reversing: spun; roll: diverged)."""
     changes, law, kind, words = LIMIT_CASES[case]
     config = _case_config(tmp_path, {**STEP, **changes}, law, {}, tire)
-    built = build_law(config)
-    single = run_compiled(config, built)
-    prep = prepare_compiled(config, built)
-    assert not isinstance(single, str) and not isinstance(prep, str), (single, prep)
-    (block,) = run_compiled_block([prep])
-    twin = run_closed_loop(config.vehicle, config.maneuver, config.law, model=config.model,
-                           dt_s=config.integration_step_s,
-                           control_period_s=config.control_period_s,
-                           belief_vehicle=config.belief, integrator=config.integrator,
-                           law_options=config.law_options, tire=config.tire)
+    single, block, twin, _ = compiled_and_twin(config)
     assert twin.end_kind == kind and words in twin.end_reason, twin.end_reason
     # it ended early, before the maneuver's last tick
     full = round(config.maneuver.duration_s / config.control_period_s)
