@@ -17,7 +17,14 @@ and never send traffic off the machine.
 
 from __future__ import annotations
 
+import faulthandler
+import importlib.util
+import io
 import os
+import signal
+import sys
+from contextlib import redirect_stdout
+from pathlib import Path
 
 import pytest
 
@@ -69,6 +76,81 @@ def ros_domain(monkeypatch: pytest.MonkeyPatch):
         yield lease.domain_id
     finally:
         lease.release()
+
+
+#: A test running this long is ended with the whole session, every thread's stack printed: the
+#: C-level watchdog of :mod:`faulthandler` (pytest.ini's ``timeout`` fails a test earlier, but
+#: through a Python handler, which never runs while the main thread is blocked in C).
+HARD_TIMEOUT_S = 900.0
+_TERMINAL_FD: list[int] = []
+
+#: Fast DDS's own cleaner of shared-memory files left by processes that died without closing
+#: them (``fastdds shm clean``), shipped with the ROS wheels under the venv.
+_FASTDDS_SHM_CLEAN = Path(sys.prefix) / "tools" / "fastdds" / "shm" / "clean.py"
+
+
+def _clean_zombie_shm() -> None:
+    """Remove the Fast DDS shared-memory ports and segments whose owner process is gone.
+
+    The suite kills and stops nodes on purpose; a node killed holding a shared-memory port
+    leaves it behind, and Fast DDS reopens that port for a later participant of the same
+    domain and participant index (known Fast DDS failures after ``kill -9``: participants that
+    hang while created, readers that never receive). Each file is removed only when no living
+    process holds its lock (the cleaner's own check), so running nodes are never touched."""
+    if not _SHM_CLEANER:
+        if not _FASTDDS_SHM_CLEAN.is_file():
+            return  # not the venv of `make setup` (a system ROS install): its users' business
+        spec = importlib.util.spec_from_file_location("fourws_test_fastdds_shm_clean",
+                                                      _FASTDDS_SHM_CLEAN)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        _SHM_CLEANER.append(module.Clean)
+    with redirect_stdout(io.StringIO()):
+        _SHM_CLEANER[0]().run(force=False)
+
+
+_SHM_CLEANER: list = []
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_configure(config: pytest.Config) -> None:
+    terminal = config.pluginmanager.get_plugin("terminalreporter")
+    if terminal is not None:
+        _TERMINAL_FD.append(os.dup(terminal._tw._file.fileno()))
+    _clean_zombie_shm()
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
+    """Arm the hard watchdog for one test (its stacks go to the terminal, not the capture)."""
+    out = os.fdopen(os.dup(_TERMINAL_FD[0]), "w") if _TERMINAL_FD else sys.__stderr__
+    faulthandler.dump_traceback_later(HARD_TIMEOUT_S, exit=True, file=out)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+        if out is not sys.__stderr__:
+            out.close()
+        _clean_zombie_shm()
+
+
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@pytest.fixture(autouse=True)
+def _signal_handling_kept():
+    """A test leaves this process's handling of SIGINT/SIGTERM as it found it: the processes
+    later tests start inherit an ignored or blocked signal (``subprocess`` passes both on), and
+    a node that ignores SIGINT cannot be stopped by the launcher or Ctrl-C."""
+    handlers = {sig: signal.getsignal(sig) for sig in _SIGNALS}
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    yield
+    changed = [sig.name for sig in _SIGNALS if signal.getsignal(sig) is not handlers[sig]]
+    now_blocked = signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+    for sig, handler in handlers.items():
+        signal.signal(sig, handler)
+    changed += [f"{sig.name} blocked" for sig in _SIGNALS if sig in now_blocked - blocked]
+    assert not changed, f"the test changed this process's signal handling: {changed}"
 
 
 _EXIT_STATUS: list[int] = []

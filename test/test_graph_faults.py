@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import selectors
 import signal
 import subprocess
 import sys
@@ -66,8 +67,15 @@ def _start_rogue(kind: str, seconds: float) -> subprocess.Popen:
     proc = subprocess.Popen([sys.executable, str(ROGUE), kind, str(seconds)],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             start_new_session=True)
-    line = proc.stdout.readline()
-    assert "rogue ready" in line, line
+    # bounded: a rogue whose participant never comes up (Fast DDS blocked in its start) must
+    # fail this test, not hold the suite
+    ready = selectors.DefaultSelector()
+    ready.register(proc.stdout, selectors.EVENT_READ)
+    line = proc.stdout.readline() if ready.select(timeout=120.0) else ""
+    if "rogue ready" not in line:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    assert "rogue ready" in line, f"the rogue node did not start within 120 s: {line!r}"
     return proc
 
 
