@@ -64,19 +64,26 @@ class PublisherNames:
         return self.name(topic, publisher_gid(info))
 
 
-#: A publisher the graph cannot name within this wall time is foreign, s.
-UNIDENTIFIED_AFTER_S = 5.0
+#: A publisher the graph cannot name within this wall time is foreign, s: the bound of the
+#: nodes' discovery phase (``fourws_ros.startup``), not a guess at how fast discovery is. Only
+#: the unnamed publisher's own messages wait meanwhile (held per publisher), so a foreign
+#: publisher that is never named delays nothing of the run.
+UNIDENTIFIED_AFTER_S = 30.0
+#: Messages held per unnamed publisher and topic; more are refused at once (a flood).
+MAX_HELD = 20_000
 
 
 class RunNodeFilter:
     """Takes messages only from the run's node of their role (the simulator's realtime
-    answers); a foreign one is refused through ``refuse(topic, detail)``.
+    answers, the controller's driver inputs); a foreign one is refused through
+    ``refuse(topic, detail)``.
 
-    A publisher the graph cannot name yet is held, in order per topic, and decided once it is
-    named (:meth:`poll`): its first messages (a transient-local history handed over on
+    A publisher the graph cannot name yet has its messages held, in order, and decided once it
+    is named (:meth:`poll`): its first messages (a transient-local history handed over on
     matching) can arrive before discovery has told this node whose they are, and a refused
     first answer is never sent again (a realtime run then waited 60 s for its first driver
-    input, seen 2 runs in 3 on a loaded machine). Unnamed after :data:`UNIDENTIFIED_AFTER_S`:
+    input, seen 2 runs in 3 on a loaded machine). Held per publisher: the run's own messages
+    never wait behind a foreign publisher's. Unnamed after :data:`UNIDENTIFIED_AFTER_S`:
     foreign.
 
     Parameters
@@ -93,16 +100,22 @@ class RunNodeFilter:
         self._names = names
         self._expected = expected
         self._refuse = refuse
-        self._held: dict[str, list[tuple[float, bytes, str, bytes, Callable[[bytes], Any]]]] = {}
+        # (topic, publisher GID) -> (wall time of the first held, [(role, raw, handler)])
+        self._held: dict[tuple[str, bytes],
+                         tuple[float, list[tuple[str, bytes, Callable[[bytes], Any]]]]] = {}
 
     def offer(self, topic: str, info: Any, role: str, raw: bytes,
               handler: Callable[[bytes], Any]) -> None:
         """A message of ``topic`` received with ``info``: ``handler(raw)`` now if it comes
         from the run's node of ``role``, later if its publisher is not named yet."""
         gid = publisher_gid(info)
-        if self._held.get(topic) or self._names.name(topic, gid) is None:
-            self._held.setdefault(topic, []).append((time.monotonic(), gid, role, raw,
-                                                     handler))
+        key = (topic, gid)
+        if key in self._held or self._names.name(topic, gid) is None:
+            held = self._held.setdefault(key, (time.monotonic(), []))[1]
+            if len(held) < MAX_HELD:
+                held.append((role, raw, handler))
+            else:
+                self._refuse(topic, "publisher (unknown): more held than the bound")
         elif self._decide(topic, gid, role):
             handler(raw)
 
@@ -115,13 +128,13 @@ class RunNodeFilter:
 
     def poll(self) -> None:
         """Pass on (or refuse) the held messages whose publisher is named now."""
-        for topic, held in self._held.items():
-            while held:
-                since, gid, role, raw, handler = held[0]
-                if (self._names.name(topic, gid) is None
-                        and time.monotonic() - since < UNIDENTIFIED_AFTER_S):
-                    break
-                held.pop(0)
+        for key, (since, held) in list(self._held.items()):
+            topic, gid = key
+            if (self._names.name(topic, gid) is None
+                    and time.monotonic() - since < UNIDENTIFIED_AFTER_S):
+                continue
+            del self._held[key]
+            for role, raw, handler in held:
                 if self._decide(topic, gid, role):
                     handler(raw)
 
@@ -144,4 +157,5 @@ def drain(subscription: Any, msg_type: type, raw: bool,
     return n
 
 
-__all__ = ["PublisherNames", "RunNodeFilter", "UNIDENTIFIED_AFTER_S", "drain", "publisher_gid"]
+__all__ = ["MAX_HELD", "PublisherNames", "RunNodeFilter", "UNIDENTIFIED_AFTER_S", "drain",
+           "publisher_gid"]

@@ -55,7 +55,8 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 
 from fourws_ros import peers, topics
-from fourws_ros.identity import PublisherNames, drain, publisher_gid
+from fourws_ros.identity import (MAX_HELD, UNIDENTIFIED_AFTER_S, PublisherNames, drain,
+                                 publisher_gid)
 from fourws_ros.runtime import EXIT_INCOMPLETE, EXIT_PEERS, SPIN_TIMEOUT_S, run_node
 from fourws_run.accounting import REPORTING_ROLES, Ledger
 from fourws_run.bagfile import BagError, BagWriter
@@ -67,10 +68,10 @@ from fourws_sim.errors import ParameterError
 STATUS_EVERY = 20
 #: Wall period of the recorder status and the pending-publisher lookups, s.
 STATUS_PERIOD_S = 0.1
-#: A publisher the ROS graph cannot name within this wall time is foreign, s.
-UNIDENTIFIED_AFTER_S = 5.0
-#: Messages kept while their publisher is being identified (per publisher).
-MAX_PENDING = 20000
+#: A publisher the ROS graph cannot name within UNIDENTIFIED_AFTER_S (wall time) is foreign;
+#: MAX_PENDING messages are kept per publisher meanwhile (fourws_ros.identity: one rule for
+#: the nodes that take messages by publisher).
+MAX_PENDING = MAX_HELD
 
 _NS_PER_S = 1_000_000_000
 #: Topics whose status messages carry a publisher's counts.
