@@ -1,7 +1,17 @@
 # SPDX-FileCopyrightText: 2026 fourws developers
 # SPDX-License-Identifier: Apache-2.0
-"""Time integrators, chosen by name: ``rk4`` (fixed step), ``euler`` (fixed step) and
-``solve_ivp`` (SciPy adaptive reference).
+"""Time integrators, chosen by name: ``rk4`` (fixed step), ``euler`` (fixed step),
+``semi_implicit_euler`` (fixed step, the compiled 8-DOF models only) and ``solve_ivp`` (SciPy
+adaptive reference).
+
+``semi_implicit_euler`` is the half-implicit Euler of multibody vehicle codes: the rates
+(velocities, roll and yaw rate, wheel spins, lags) take an explicit step from the forces at the
+step's start, then the pose (roll angle, heading, position, free steering angle) a step with the
+*new* rates. First order and one right-hand side per step like ``euler``, but symplectic for
+the roll spring (an undamped oscillator's energy stays bounded instead of growing). It needs
+the model's split into pose and rates, which the compiled 8-DOF kernels have
+(``eightdof_kernels.semi_implicit_euler``); ``bench/work_precision.py`` compares the three
+fixed-step schemes by error against ``solve_ivp`` per cost.
 
 An integrator advances a model ``f(t, x, u, p) -> dx/dt`` with the input ``u`` held constant
 over the interval (zero-order hold, the way a simulator node applies its latest command)::
@@ -51,7 +61,8 @@ class Integrator:
     name : str
         Registry name.
     compiled_name : str or None
-        Name of the matching compiled kernel (``"rk4"``, ``"euler"``) or None.
+        Name of the matching compiled kernel (``"rk4"``, ``"euler"``,
+        ``"semi_implicit_euler"``) or None.
     """
 
     name: str
@@ -115,6 +126,15 @@ def _euler(f: Derivative, t: float, x: np.ndarray, u: np.ndarray, p: Any, dt: fl
     return x
 
 
+def _semi_implicit(f: Derivative, t: float, x: np.ndarray, u: np.ndarray, p: Any, dt: float,
+                   n: int) -> np.ndarray:
+    if n == 0:
+        return x
+    raise ParameterError("integrator", "semi_implicit_euler needs the model's split into pose "
+                         "and rates, which only the compiled 8-DOF models have (8dof, "
+                         "8dof-free); use rk4 or euler")
+
+
 def _solve_ivp(f: Derivative, t: float, x: np.ndarray, u: np.ndarray, p: Any, dt: float,
                n: int) -> np.ndarray:
     from scipy.integrate import solve_ivp  # scipy: only the offline reference needs it
@@ -131,6 +151,8 @@ def _solve_ivp(f: Derivative, t: float, x: np.ndarray, u: np.ndarray, p: Any, dt
 INTEGRATORS: dict[str, Integrator] = {
     "rk4": Integrator("rk4", "rk4", _rk4),
     "euler": Integrator("euler", "euler", _euler),
+    "semi_implicit_euler": Integrator("semi_implicit_euler", "semi_implicit_euler",
+                                      _semi_implicit),
     "solve_ivp": Integrator("solve_ivp", None, _solve_ivp),
 }
 
@@ -141,7 +163,8 @@ def get_integrator(name: str) -> Integrator:
     Raises
     ------
     UnknownNameError
-        If ``name`` is not one of ``euler``, ``rk4``, ``solve_ivp`` (the message lists them).
+        If ``name`` is not one of ``euler``, ``rk4``, ``semi_implicit_euler``, ``solve_ivp``
+        (the message lists them).
     """
     try:
         return INTEGRATORS[name]

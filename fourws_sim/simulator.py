@@ -78,6 +78,19 @@ class Inputs:
     brake_torque_nm: Sequence[float] = (0.0, 0.0, 0.0, 0.0)
 
 
+def _semi_implicit_step(x: np.ndarray, k: np.ndarray, h: float) -> np.ndarray:
+    """One semi-implicit Euler step of the 8-DOF state (``eightdof_kernels``' arithmetic)."""
+    S = eightdof.STATE
+    xt = x + h * k
+    xt[S.PHI] = x[S.PHI] + h * xt[S.P]
+    xt[S.PSI] = x[S.PSI] + h * xt[S.R]
+    sps, cps = math.sin(x[S.PSI]), math.cos(x[S.PSI])
+    xt[S.X] = x[S.X] + h * (xt[S.U] * cps - xt[S.V] * sps)
+    xt[S.Y] = x[S.Y] + h * (xt[S.U] * sps + xt[S.V] * cps)
+    xt[S.DELTA_S] = x[S.DELTA_S] + h * xt[S.DELTA_S_RATE]
+    return xt
+
+
 def _field_names() -> list[str]:
     """Input field name of each 8-DOF input slot (for error messages)."""
     names = []
@@ -105,7 +118,7 @@ class Simulator:
     model : str
         Model name (``fourws_sim.models.MODELS``): ``8dof`` (default), ``2dof``, ``3dof``, ...
     integrator : str
-        ``rk4`` (default), ``euler`` or ``solve_ivp``.
+        ``rk4`` (default), ``euler``, ``semi_implicit_euler`` (8-DOF models) or ``solve_ivp``.
     dt_s : float
         Integration step in s (default 1 ms).
     tire : str, optional
@@ -133,6 +146,10 @@ class Simulator:
             raise ParameterError("dt_s", f"must be a finite number > 0, got {dt_s!r}")
         self.dt_s = float(dt_s)
         self._is_8dof = model in (EIGHT_DOF, EIGHT_DOF_FREE)
+        if integrator == "semi_implicit_euler" and not self._is_8dof:
+            raise ParameterError("integrator", f"semi_implicit_euler is for the {EIGHT_DOF} "
+                                 f"models (their pose and rates are split); {model} takes rk4 "
+                                 "or euler")
         self._n_input = len(self.model.INPUT)
         self._u = np.zeros(self._n_input)
         self._u_shape = (self._n_input,)
@@ -384,6 +401,8 @@ class Simulator:
                 k1 = k1 if sub == 0 else f(x)
                 if self.integrator.name == "euler":
                     x = x + h * k1
+                elif self.integrator.name == "semi_implicit_euler":
+                    x = _semi_implicit_step(x, k1, h)
                 else:
                     k2 = f(x + 0.5 * h * k1)
                     k3 = f(x + 0.5 * h * k2)

@@ -312,7 +312,7 @@ def test_light_driven_wheel_slips_exactly(table_8_1: Vehicle) -> None:
                                                           / eightdof.RK4_RATE_BOUND)
 
 
-@pytest.mark.parametrize("integrator", ["rk4", "euler"])
+@pytest.mark.parametrize("integrator", ["rk4", "euler", "semi_implicit_euler"])
 def test_a_step_in_sub_steps_equals_that_many_short_steps(table_8_1: Vehicle,
                                                           integrator: str) -> None:
     """The compiled loops split a step into ``eightdof.substeps(rate, dt)`` equal sub-steps:

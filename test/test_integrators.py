@@ -3,7 +3,9 @@
 """Integrators: orders of accuracy against analytic solutions, registry and bad input.
 
 Sources: the exact solution of the linear ODE x' = A x + B u (matrix exponential), the global
-error orders of explicit Euler (1) and classical Runge-Kutta (4).
+error orders of explicit Euler (1) and classical Runge-Kutta (4), and for the 8-DOF model's
+semi-implicit Euler its order (1) against the adaptive ``solve_ivp`` reference and its
+definition (the rates' explicit step, then the pose with the new rates).
 """
 
 from __future__ import annotations
@@ -81,7 +83,8 @@ def test_zero_steps_returns_the_state() -> None:
 
 
 def test_unknown_integrator_lists_the_valid_names() -> None:
-    with pytest.raises(UnknownNameError, match="euler, rk4, solve_ivp") as info:
+    with pytest.raises(UnknownNameError,
+                       match="euler, rk4, semi_implicit_euler, solve_ivp") as info:
         get_integrator("rk45")
     assert isinstance(info.value, ValueError)
 
@@ -92,3 +95,66 @@ def test_bad_step_names_the_field(dt: float, n: int, field: str) -> None:
     A, B, u = linear_system()
     with pytest.raises(ParameterError, match=field):
         get_integrator("rk4").advance(f_linear, 0.0, np.zeros(2), u, (A, B), dt, n)
+
+
+def _eightdof_final(integrator: str, dt: float, t_end: float = 2.0) -> np.ndarray:
+    """8-DOF (table_8_1) state after ``t_end`` s of a 0.03 rad front step at 85 km/h."""
+    from fourws_sim.models.eightdof import INPUT
+    from fourws_sim.simulator import Simulator
+
+    sim = Simulator("table_8_1", integrator=integrator, dt_s=dt, speed_mps=SPEED_MPS)
+    u = np.zeros(len(INPUT))
+    u[INPUT.DELTA_F] = 0.03
+    sim.step(u, int(round(t_end / dt)))
+    return sim.state
+
+
+def test_semi_implicit_euler_is_first_order_on_the_eightdof() -> None:
+    """Halving the step halves the semi-implicit Euler error of the yaw rate and the heading
+    against the solve_ivp reference (DOP853 at 1e-10, four orders below these errors)."""
+    from fourws_sim.models.eightdof import STATE
+
+    ref = _eightdof_final("solve_ivp", 0.01)
+    e1, e2 = (np.abs(_eightdof_final("semi_implicit_euler", dt) - ref) for dt in (2e-3, 1e-3))
+    for s in (STATE.R, STATE.PSI, STATE.Y):
+        assert e1[s] / e2[s] == pytest.approx(2.0, rel=0.05), STATE(s).name
+    assert 1e-6 < e2[STATE.R] < 1e-3  # first order at 1 ms: far from RK4's 1e-10
+
+
+def test_semi_implicit_euler_kernel_takes_the_pose_with_the_new_rates() -> None:
+    """One compiled step equals its definition written out in NumPy from the compiled
+    right-hand side: x' = x + h f(x), then roll angle, heading, position and free steering
+    angle again from the new rates at the old heading (bit for bit)."""
+    from fourws_sim.models import eightdof
+    from fourws_sim.models.eightdof import INPUT, STATE
+    from fourws_sim.simulator import Simulator
+
+    sim = Simulator("table_8_1", integrator="semi_implicit_euler", speed_mps=SPEED_MPS)
+    u = np.zeros(len(INPUT))
+    u[INPUT.DELTA_F] = 0.03
+    sim.step(u, 300)  # turning and rolling: every pose rate is non-zero
+    x = sim.state.copy()
+    k = np.zeros(eightdof.N_STATE)
+    eightdof.kernels_for(sim._p.tire_name).rhs(x, u, sim._q, sim._cf, sim._cr, k,
+                                               np.zeros(eightdof.N_AUX))
+    h = sim.dt_s
+    want = x + h * k
+    want[STATE.PHI] = x[STATE.PHI] + h * want[STATE.P]
+    want[STATE.PSI] = x[STATE.PSI] + h * want[STATE.R]
+    c, s = np.cos(x[STATE.PSI]), np.sin(x[STATE.PSI])
+    want[STATE.X] = x[STATE.X] + h * (want[STATE.U] * c - want[STATE.V] * s)
+    want[STATE.Y] = x[STATE.Y] + h * (want[STATE.U] * s + want[STATE.V] * c)
+    sim.step(u, 1)
+    np.testing.assert_allclose(sim.state, want, rtol=1e-15, atol=1e-18)
+    assert not np.array_equal(want, x + h * k)  # the pose did take the new rates
+
+
+def test_semi_implicit_euler_is_refused_for_models_without_a_pose_split() -> None:
+    from fourws_sim.simulator import Simulator
+
+    with pytest.raises(ParameterError, match="semi_implicit_euler is for the 8dof"):
+        Simulator("table_4_1_set_1", model="2dof", integrator="semi_implicit_euler")
+    A, B, u = linear_system()
+    with pytest.raises(ParameterError, match="compiled 8-DOF"):
+        get_integrator("semi_implicit_euler").advance(f_linear, 0.0, np.zeros(2), u, (A, B),
+                                                      1e-3, 1)

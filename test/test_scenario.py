@@ -71,6 +71,7 @@ def test_belief_scaling_and_tire_override() -> None:
     ({"recording": {"topics": ["no_slash"]}}, "recording.topics"),
     ({"law_options": {"lqr": {}}}, "law_options.lqr"),
     ({"law_options": {"sol1": {"control_period_s": 0.02}}}, "law_options.sol1.control_period_s"),
+    ({"model": "2dof", "integrator": "semi_implicit_euler"}, "integrator"),
 ])
 def test_malformed_scenario_names_field_and_file(tmp_path: Path, change: dict,
                                                  field: str) -> None:

@@ -623,8 +623,10 @@ def _longitudinal_stiffness(module: ModuleType, coeffs: np.ndarray, fz: float,
 
 def rate_bound(integrator: str) -> float:
     """Largest |lambda h| a sub-step h of ``integrator`` may take (:data:`RK4_RATE_BOUND`;
-    :data:`EULER_RATE_BOUND` for ``euler``; ``solve_ivp`` is held to RK4's)."""
-    return EULER_RATE_BOUND if integrator == "euler" else RK4_RATE_BOUND
+    :data:`EULER_RATE_BOUND` for ``euler`` and ``semi_implicit_euler``, whose slip and spin
+    states take an explicit step; ``solve_ivp`` is held to RK4's)."""
+    return (EULER_RATE_BOUND if integrator in ("euler", "semi_implicit_euler")
+            else RK4_RATE_BOUND)
 
 
 def substeps(slip_rate_per_s: float, dt_s: float, integrator: str = "rk4") -> int:
@@ -915,11 +917,15 @@ class Kernels(NamedTuple):
         state at its start).
     euler : callable
         Same contract with explicit Euler.
+    semi_implicit_euler : callable
+        Same contract with semi-implicit Euler (the rates explicitly, then the pose with the
+        new rates).
     """
 
     rhs: Callable[..., Any]
     rk4: Callable[..., Any]
     euler: Callable[..., Any]
+    semi_implicit_euler: Callable[..., Any]
 
 
 _KERNEL_CACHE: dict[str, Kernels] = {}
@@ -952,7 +958,8 @@ def kernels_for(tire_name: str) -> Kernels:
     """
     if tire_name not in _KERNEL_CACHE:
         module = kernel_module(tire_name)
-        _KERNEL_CACHE[tire_name] = Kernels(module.rhs, module.rk4, module.euler)
+        _KERNEL_CACHE[tire_name] = Kernels(module.rhs, module.rk4, module.euler,
+                                           module.semi_implicit_euler)
     return _KERNEL_CACHE[tire_name]
 
 
