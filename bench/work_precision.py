@@ -109,8 +109,9 @@ def main(argv: list[str] | None = None) -> int:
                        "end": run.end_kind, **err, "us_per_step": cost * 1e6,
                        "ms_per_simulated_s": cost / dt * 1e3}
                 rows.append(row)
-                print(f"  {integrator:20s} {dt * 1e3:5.2f} ms: yaw rate {err['yaw_rate_radps']:.2e}"
-                      f" rad/s, sideslip {err['sideslip_rad']:.2e} rad, y(end) "
+                print(f"  {integrator:20s} {dt * 1e3:5.2f} ms: yaw rate "
+                      f"{err['yaw_rate_radps']:.2e} rad/s, sideslip "
+                      f"{err['sideslip_rad']:.2e} rad, y(end) "
                       f"{err['y_end_m']:.2e} m; {row['us_per_step']:.2f} us/step, "
                       f"{row['ms_per_simulated_s']:.2f} ms per simulated s", flush=True)
     if args.json:

@@ -591,49 +591,6 @@ def rk4(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
     return n
 
 
-def _euler_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux):  # type: ignore[no-untyped-def]
-    """One explicit-Euler step of ``dt`` in ``n_sub`` equal sub-steps (as
-    :func:`_rk4_substeps`)."""
-    xt = work[_XT]
-    x0 = work[_X0]
-    for j in range(N_STATE):
-        x0[j] = x[j]
-    h = dt / n_sub
-    for _ in range(n_sub):
-        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
-        _advance(x, work[_K1], h, xt, N_STATE)
-        if not _accept(x, xt, N_STATE):
-            for j in range(N_STATE):
-                x[j] = x0[j]
-            return False
-    return True
-
-
-def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
-    """``n`` explicit-Euler steps in place, in sub-steps where the state needs them (bound
-    ``EULER_RATE_BOUND``, :func:`_euler_substeps`); returns the number of finite steps done
-    (the same ``u_held`` option as :func:`rk4`)."""
-    if u_held is not None:
-        if not _take_input_inline(u, u_held):
-            return -1
-    work = np.empty((6, N_STATE))
-    aux = np.empty(N_AUX)
-    xt = work[_XT]
-    pt = _parameter_terms_inline(q)
-    dt_over_bound = dt / EULER_BOUND
-    for step in range(n):
-        _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
-        n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
-        if n_sub > 1:
-            if not _euler_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
-                return step
-            continue
-        _advance(x, work[_K1], dt, xt, N_STATE)
-        if not _accept(x, xt, N_STATE):
-            return step
-    return n
-
-
 def _pose_from_new_rates(x, xt, h):  # type: ignore[no-untyped-def]
     """Semi-implicit Euler's second half: the pose states of ``xt`` (an explicit-Euler step
     from ``x``) taken again with the step's *new* rates, ``q_{n+1} = q_n + h g(v_{n+1}, q_n)``
@@ -651,10 +608,11 @@ def _pose_from_new_rates(x, xt, h):  # type: ignore[no-untyped-def]
 _pose_from_new_rates = _jit_inline(_pose_from_new_rates)
 
 
-def _semi_implicit_substeps(x, u, q, pt, cf, cr, dt, n_sub, work,  # type: ignore
-                            aux):
-    """One semi-implicit Euler step of ``dt`` in ``n_sub`` equal sub-steps (as
-    :func:`_rk4_substeps`)."""
+def _euler_substeps(x, u, q, pt, cf, cr, dt, n_sub, work, aux,  # type: ignore
+                    semi=False):
+    """One explicit-Euler step of ``dt`` in ``n_sub`` equal sub-steps (as
+    :func:`_rk4_substeps`); with ``semi`` semi-implicit Euler's sub-steps
+    (:func:`_pose_from_new_rates`)."""
     xt = work[_XT]
     x0 = work[_X0]
     for j in range(N_STATE):
@@ -663,7 +621,8 @@ def _semi_implicit_substeps(x, u, q, pt, cf, cr, dt, n_sub, work,  # type: ignor
     for _ in range(n_sub):
         _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
         _advance(x, work[_K1], h, xt, N_STATE)
-        _pose_from_new_rates(x, xt, h)
+        if semi:
+            _pose_from_new_rates(x, xt, h)
         if not _accept(x, xt, N_STATE):
             for j in range(N_STATE):
                 x[j] = x0[j]
@@ -671,13 +630,12 @@ def _semi_implicit_substeps(x, u, q, pt, cf, cr, dt, n_sub, work,  # type: ignor
     return True
 
 
-def semi_implicit_euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore
-    """``n`` semi-implicit (symplectic) Euler steps in place: the rates (velocities, roll and
-    yaw rate, wheel spins, lags) by an explicit step from the forces at the step's start, then
-    the pose by the new rates (:func:`_pose_from_new_rates`), as a half-implicit Euler of
-    multibody codes. First order, one right-hand side per step; sub-steps as :func:`euler`
-    (its bound); returns the number of finite steps done (the ``u_held`` option of
-    :func:`rk4`)."""
+def _first_order(x, u, q, cf, cr, dt, n, u_held, semi):  # type: ignore[no-untyped-def]
+    """``n`` explicit-Euler steps in place, or with ``semi`` semi-implicit Euler steps (the
+    rates explicitly, then the pose with the new rates, :func:`_pose_from_new_rates`), in
+    sub-steps where the state needs them (bound ``EULER_RATE_BOUND``,
+    :func:`_euler_substeps`); returns the number of finite steps done (the same ``u_held``
+    option as :func:`rk4`)."""
     if u_held is not None:
         if not _take_input_inline(u, u_held):
             return -1
@@ -690,21 +648,35 @@ def semi_implicit_euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore
         _rhs_called(x, u, q, pt, cf, cr, work[_K1], aux)
         n_sub = _substeps_inline(aux[a_rate], dt_over_bound)
         if n_sub > 1:
-            if not _semi_implicit_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux):
+            if not _euler_substeps_called(x, u, q, pt, cf, cr, dt, n_sub, work, aux, semi):
                 return step
             continue
         _advance(x, work[_K1], dt, xt, N_STATE)
-        _pose_from_new_rates(x, xt, dt)
+        if semi:
+            _pose_from_new_rates(x, xt, dt)
         if not _accept(x, xt, N_STATE):
             return step
     return n
 
 
+def euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore[no-untyped-def]
+    """``n`` explicit-Euler steps in place (:func:`_first_order`)."""
+    return _first_order(x, u, q, cf, cr, dt, n, u_held, False)
+
+
+def semi_implicit_euler(x, u, q, cf, cr, dt, n, u_held=None):  # type: ignore
+    """``n`` semi-implicit (symplectic) Euler steps in place: the rates (velocities, roll and
+    yaw rate, wheel spins, lags) by an explicit step from the forces at the step's start, then
+    the pose by the new rates (:func:`_pose_from_new_rates`), as the half-implicit Euler of
+    multibody codes. First order, one right-hand side per step (:func:`_first_order`)."""
+    return _first_order(x, u, q, cf, cr, dt, n, u_held, True)
+
+
 _rk4_substeps_called = _jit(_rk4_substeps)
 _euler_substeps_called = _jit(_euler_substeps)
+_first_order = _jit_inline(_first_order)
 rk4 = _jit(rk4)
 euler = _jit(euler)
-_semi_implicit_substeps_called = _jit(_semi_implicit_substeps)
 semi_implicit_euler = _jit(semi_implicit_euler)
 
 
