@@ -9,6 +9,13 @@
   with the state at 200 Hz — the simulator's step lateness (99th percentile and max, from its
   histogram) and overruns, and the recorded state rate.
 
+* start-up: ``--startups`` short lockstep runs (1 s simulated): the wall time from the
+  nodes' launch to the start of the simulation (``RunRecord.startup_s``: processes started,
+  imported, configured, kernels loaded, discovered and matched) and of the whole run
+  (launch to the verified bag), median, min and max;
+* the demo: ``--demo`` times ``fourws demo`` (three laws of the default scenario through the
+  graph, then the report) as a user runs it.
+
 Both runs report their recording accounting: every topic's published and stored counts
 (``*_recording``; published = stored is what a complete bag means). A 10-minute realtime soak
 is ``fourws bench-graph --lockstep-seconds 0 --realtime-seconds 600``.
@@ -42,6 +49,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="duration of the realtime run, s (default 60; 0 skips it)")
     parser.add_argument("--state-rate-hz", type=float, default=200.0,
                         help="realtime state rate, Hz (default 200)")
+    parser.add_argument("--startups", type=int, default=5,
+                        help="short lockstep runs timing the graph's start-up (default 5; 0 "
+                             "skips them)")
+    parser.add_argument("--demo", action="store_true",
+                        help="also time `fourws demo` (wall time, s)")
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="keep the runs (bags, logs) in DIR")
     parser.add_argument("--no-scene", action="store_true",
@@ -83,6 +95,46 @@ def _overrun_times(bag_path) -> list[float]:
     return [float(t) for row in status.fields["overrun_times_s"] for t in row]
 
 
+def _startups(n: int, config, out: Path, quiet, extra: dict, result: dict) -> bool:
+    """``n`` short lockstep runs: start-up and whole-run wall times into ``result``."""
+    import statistics
+    import time
+
+    from fourws_ros.graph_run import run_graph  # rclpy: not for --help
+
+    startup, whole, ok = [], [], True
+    for k in range(n):
+        t0 = time.monotonic()
+        rec = run_graph(config(_scenario(1.0)), out, run_name=f"startup{k}", echo=quiet,
+                        **extra)
+        whole.append(time.monotonic() - t0)
+        ok &= rec.ok
+        if rec.startup_s > 0:
+            startup.append(rec.startup_s)
+    for name, values in (("startup_s", startup), ("startup_run_wall_s", whole)):
+        if values:
+            result.update({f"{name}_median": statistics.median(values),
+                           f"{name}_min": min(values), f"{name}_max": max(values)})
+    result["startup_runs"] = n
+    result["startup_runs_ok"] = ok
+    return ok
+
+
+def _demo(out: Path, result: dict) -> bool:
+    """Wall time of ``fourws demo`` into ``result``."""
+    import subprocess
+    import sys
+    import time
+
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, "-m", "fourws_cli.main", "demo", "--out",
+                           str(out / "demo")], stdout=subprocess.DEVNULL,
+                          stderr=subprocess.DEVNULL, check=False)
+    result["demo_wall_s"] = time.monotonic() - t0
+    result["demo_ok"] = proc.returncode == 0
+    return proc.returncode == 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark; returns the exit code."""
     from fourws_analysis.bag import load_bag  # scipy, control: not for --help
@@ -94,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
     bounded("--lockstep-seconds", args.lockstep_seconds, 0.0, MAX_DURATION_S, " s")
     bounded("--realtime-seconds", args.realtime_seconds, 0.0, MAX_DURATION_S, " s")
     bounded("--state-rate-hz", args.state_rate_hz, 1.0, 1e4, " Hz")
+    bounded("--startups", args.startups, 0, 1000, "")
     out = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="fourws-bench-"))
     quiet = (lambda _text: None) if args.json else None
     result: dict[str, object] = {"load_average_before": os.getloadavg()[0],
@@ -113,6 +166,10 @@ def run(args: argparse.Namespace) -> int:
 
     ok = True
     try:
+        if args.startups > 0:
+            ok &= _startups(args.startups, config, out, quiet, extra, result)
+        if args.demo:
+            ok &= _demo(out, result)
         if args.lockstep_seconds > 0:
             lock = run_graph(config(_scenario(args.lockstep_seconds)), out,
                              run_name="lockstep", echo=quiet, **extra)

@@ -225,6 +225,7 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         record.exit_codes = group.exit_codes()
     if state.t_start:
         record.wall_time_s = max(state.t_end - state.t_start, 0.0)
+        record.startup_s = max(state.t_start - group.started_at, 0.0)
     conclude(record, config, state.sim_report(), state.maneuver_report(), interrupt.set,
              _with_last_words(failure, state), _check_bag(record.bag_path))
     _label_user_law(record, config)

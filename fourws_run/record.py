@@ -67,6 +67,9 @@ class RunRecord:
     bag_path : Path or None
     sim_time_s, wall_time_s : float
         Simulated time reached and the wall time of the running phase, s.
+    startup_s : float
+        Wall time from the launch of the nodes to the start of the simulation (the graph up
+        and matched), s; 0 if it never started.
     max_lateness_s, p99_lateness_s : float
         Realtime step lateness, s.
     overruns : int
@@ -98,6 +101,7 @@ class RunRecord:
     bag_path: Path | None
     sim_time_s: float = 0.0
     wall_time_s: float = 0.0
+    startup_s: float = 0.0
     max_lateness_s: float = 0.0
     p99_lateness_s: float = 0.0
     overruns: int = 0
@@ -189,7 +193,7 @@ class RunRecord:
             "reason": self.reason, "law": self.law, "run_dir": str(self.run_dir),
             "bag_path": None if self.bag_path is None else str(self.bag_path),
             "sim_time_s": self.sim_time_s, "wall_time_s": self.wall_time_s,
-            "realtime_factor": self.realtime_factor, "max_lateness_s": self.max_lateness_s,
+            "startup_s": self.startup_s, "realtime_factor": self.realtime_factor, "max_lateness_s": self.max_lateness_s,
             "p99_lateness_s": self.p99_lateness_s, "overruns": self.overruns,
             "stale_commands": self.stale_commands, "control_ticks": self.control_ticks,
             "clock_mode": self.clock_mode, "behind_real_time": self.behind_real_time,
@@ -210,6 +214,7 @@ class RunRecord:
             bag_path=None if data.get("bag_path") is None else Path(data["bag_path"]),
             sim_time_s=float(data.get("sim_time_s", 0.0)),
             wall_time_s=float(data.get("wall_time_s", 0.0)),
+            startup_s=float(data.get("startup_s", 0.0)),
             max_lateness_s=float(data.get("max_lateness_s", 0.0)),
             p99_lateness_s=float(data.get("p99_lateness_s", 0.0)),
             overruns=int(data.get("overruns", 0)),

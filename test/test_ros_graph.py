@@ -275,9 +275,11 @@ def test_bench_graph_reports_a_realtime_run(tmp_path):
     """`fourws bench-graph` with only a realtime run (the soak command, shortened to 1 s):
     one JSON object whose realtime run is ok and complete, every recorded topic stored as
     published, states every 5 ms (200 Hz) with no gap, and the overrun times read from the
-    bag (a list). Timings are reported, not asserted."""
+    bag (a list); two start-up runs, each ok, whose start-up (launch to simulation start) is
+    part of its whole run. Timings are reported, not asserted."""
     res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "bench-graph", "--json",
                           "--lockstep-seconds", "0", "--realtime-seconds", "1",
+                          "--startups", "2",
                           "--keep", str(tmp_path / "keep")],
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stdout + res.stderr
@@ -288,3 +290,8 @@ def test_bench_graph_reports_a_realtime_run(tmp_path):
         assert n["published"] == n["stored"] and n["lost"] == 0, topic
     assert out["realtime_state_rate_hz"] == pytest.approx(200.0, rel=1e-6)
     assert isinstance(out["realtime_overrun_times_s"], list)
+    assert out["startup_runs"] == 2 and out["startup_runs_ok"]
+    assert 0 < out["startup_s_min"] <= out["startup_s_median"] <= out["startup_s_max"]
+    # each run's start-up is part of it, so every order statistic is
+    for stat in ("min", "median", "max"):
+        assert out[f"startup_s_{stat}"] < out[f"startup_run_wall_s_{stat}"], stat
