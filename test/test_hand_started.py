@@ -30,6 +30,32 @@ def _node(name: str, *args: str, env: dict) -> subprocess.Popen:
                             start_new_session=True)
 
 
+def _outputs(procs: dict[str, subprocess.Popen], timeout_s: float) -> dict[str, str]:
+    """Each node's output once it ended; a node still running ``timeout_s`` after the one
+    before it ended fails the test with every node's last lines (which one waits for what)."""
+    outs: dict[str, str] = {}
+    late = ""
+    try:
+        for name, proc in procs.items():
+            late = name
+            outs[name] = proc.communicate(timeout=timeout_s)[0].decode(errors="replace")
+        late = ""
+    except subprocess.TimeoutExpired:
+        pass
+    finally:
+        for proc in procs.values():
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+    if late:
+        for name, proc in procs.items():
+            if name not in outs:
+                outs[name] = proc.communicate()[0].decode(errors="replace")
+        tails = "\n".join(f"--- {name} (exit {procs[name].returncode}):\n"
+                          + "\n".join(out.splitlines()[-8:]) for name, out in outs.items())
+        raise AssertionError(f"node {late} still running after {timeout_s:g} s\n{tails}")
+    return outs
+
+
 def test_hand_started_lockstep_graph_ends_by_itself_with_a_complete_described_bag(
         tmp_path, ros_domain):
     bag = tmp_path / "bag"
@@ -40,14 +66,7 @@ def test_hand_started_lockstep_graph_ends_by_itself_with_a_complete_described_ba
         "maneuver": _node("maneuver", env=env),
         "simulator": _node("simulator", env=env),
     }
-    outs = {}
-    try:
-        for name, proc in procs.items():
-            outs[name] = proc.communicate(timeout=180)[0].decode(errors="replace")
-    finally:
-        for proc in procs.values():
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGKILL)
+    outs = _outputs(procs, 180.0)
     for name, proc in procs.items():
         assert proc.returncode == 0, f"{name}: {outs[name]}"
     assert "complete" in outs["recorder"]
