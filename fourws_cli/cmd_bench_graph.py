@@ -31,7 +31,11 @@ import dataclasses
 import json
 import os
 import shutil
+import statistics
+import subprocess
+import sys
 import tempfile
+import time
 from pathlib import Path
 
 from fourws_cli._bounds import bounded
@@ -97,9 +101,6 @@ def _overrun_times(bag_path) -> list[float]:
 
 def _startups(n: int, config, out: Path, quiet, extra: dict, result: dict) -> bool:
     """``n`` short lockstep runs: start-up and whole-run wall times into ``result``."""
-    import statistics
-    import time
-
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
 
     startup, whole, ok = [], [], True
@@ -122,10 +123,6 @@ def _startups(n: int, config, out: Path, quiet, extra: dict, result: dict) -> bo
 
 def _demo(out: Path, result: dict) -> bool:
     """Wall time of ``fourws demo`` into ``result``."""
-    import subprocess
-    import sys
-    import time
-
     t0 = time.monotonic()
     proc = subprocess.run([sys.executable, "-m", "fourws_cli.main", "demo", "--out",
                            str(out / "demo")], stdout=subprocess.DEVNULL,
