@@ -60,9 +60,9 @@ NODE_EXIT_S = 40.0
 REALTIME_OVERRUN_S = 2.0
 #: Process name of the live view (``fourws run --live``).
 LIVE_VIEW = "fourws_live_view"
-#: SCHED_FIFO priority of the answer chain (simulator, maneuver, controller), when permitted
-#: (speed only; the verdict never depends on it: a realtime run whose answers come late says
-#: so, as stale commands).
+#: SCHED_FIFO priority of a realtime run's answer chain (simulator, maneuver, controller), when
+#: permitted (timeliness only; the verdict never depends on it: a realtime run whose answers
+#: come late says so, as stale commands). Lockstep runs keep the normal scheduler.
 FIFO_PRIORITY = 10
 
 
@@ -359,13 +359,18 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
     why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded, replay)
     if why:
         return why
-    # the answer chain: in lockstep it sets the pace, in realtime its answers must come
-    # within the command freshness limit (the realtime thread raises itself higher)
-    chain = [NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER], config.controller.node_name]
-    granted = [set_fifo(c.proc.pid, FIFO_PRIORITY) for c in group.children
-               if c.name in chain and c.proc is not None]
-    if not all(granted):
-        echo("  (real-time priority not permitted: expect more latency under load)")
+    # the answer chain of a realtime run: its answers must come within the command freshness
+    # limit (the realtime thread raises itself higher). Not in lockstep, where only the pace
+    # would gain: three processes answering each other flat out at SCHED_FIFO took both cores
+    # of a two-core machine from everything else for the whole run (a live view beside a
+    # lockstep run then received 3 % of the frames, and the user's desktop froze).
+    if not config.lockstep:
+        chain = [NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER],
+                 config.controller.node_name]
+        granted = [set_fifo(c.proc.pid, FIFO_PRIORITY) for c in group.children
+                   if c.name in chain and c.proc is not None]
+        if not all(granted):
+            echo("  (real-time priority not permitted: expect more latency under load)")
     if not ros.start_simulation():
         return "the simulator did not answer the start request"
     echo(f"  graph up after {time.monotonic() - group.started_at:.1f} s; running "

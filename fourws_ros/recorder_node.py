@@ -72,6 +72,11 @@ STATUS_PERIOD_S = 0.1
 #: MAX_PENDING messages are kept per publisher meanwhile (fourws_ros.identity: one rule for
 #: the nodes that take messages by publisher).
 MAX_PENDING = MAX_HELD
+#: Once every writer has reported its final counts, a bag still incomplete with nothing held
+#: for identification and nothing received for this long (wall time) never completes: what
+#: is missing was lost (a reliable writer delivers what it has within a fraction of that), so
+#: the recorder closes it incomplete and says what is missing instead of waiting, s.
+INCOMPLETE_AFTER_END_S = 10.0
 
 _NS_PER_S = 1_000_000_000
 #: Topics whose status messages carry a publisher's counts.
@@ -354,8 +359,16 @@ class RecorderNode(Node):
     def _check_complete(self) -> None:
         if self.closed or not self.ledger.ended:
             return
-        if self.ledger.account().complete and bool(
-                self.get_parameter("close_when_complete").value):
+        account = self.ledger.account()
+        if account.complete and bool(self.get_parameter("close_when_complete").value):
+            self._close()
+            self.finished = True
+        elif (not account.complete and not self._pending
+              and time.monotonic() - self._last_rx > INCOMPLETE_AFTER_END_S):
+            why = (f"every writer reported its final counts, and {account.summary()} after "
+                   f"{INCOMPLETE_AFTER_END_S:g} s without a message")
+            self.get_logger().error(why)
+            self._gave_up = why
             self._close()
             self.finished = True
 

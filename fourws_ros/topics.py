@@ -29,8 +29,16 @@ QoS choice (why):
   so, naming the topic and the node).
 * ``CLOCK_QOS`` (``/clock``): reliable, volatile: a late ``use_sim_time`` node must start at the
   current time, not replay the past.
-* ``STATUS_QOS`` (simulator, maneuver and recorder status): reliable, keep last
-  :data:`STATUS_DEPTH` -- the events (``done``, final counts) must arrive.
+* ``EVENT_QOS`` (simulator and maneuver status, which the recorder stores and counts): reliable,
+  **transient local**, keep last :data:`STATUS_DEPTH` -- the events (``done``, final counts)
+  must arrive, and the recorder must hold every one: in a graph started by hand nobody tells
+  the writers to wait for the recorder, and a volatile maneuver status published before the
+  recorder's reader had matched was never sent again (the recorder then waited for good for
+  the 6 statuses of the run's first 0.6 s, seen in 2 of 8 hand-started runs). Their other
+  readers (simulator, controller, launcher) stay volatile (``STATUS_QOS``): they need what
+  comes from now on, which a transient-local writer serves too.
+* ``STATUS_QOS`` (the recorder's status, and the volatile readers of the two above): reliable,
+  keep last :data:`STATUS_DEPTH`.
 * ``LATCHED_QOS`` (run and node configuration, ``/tf_static``, ``/robot_description``):
   reliable, transient local, depth 1 per publisher -- a recorder, RViz or Foxglove that joins
   late still gets them (what tf2's static listener and robot_state_publisher use).
@@ -68,6 +76,9 @@ STREAM_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STREAM_DEPTH,
 STATUS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STATUS_DEPTH,
                         reliability=ReliabilityPolicy.RELIABLE,
                         durability=DurabilityPolicy.VOLATILE)
+EVENT_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STATUS_DEPTH,
+                       reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -89,8 +100,8 @@ TOPIC_QOS: dict[str, QoSProfile] = {
     STATE: STREAM_QOS,
     DRIVER_INPUT: STREAM_QOS,
     REAR_STEER_CMD: STREAM_QOS,
-    MANEUVER_STATUS: STATUS_QOS,
-    SIM_STATUS: STATUS_QOS,
+    MANEUVER_STATUS: EVENT_QOS,
+    SIM_STATUS: EVENT_QOS,
     ODOM: STREAM_QOS,
     IMU: STREAM_QOS,
     RUN_CONFIG: LATCHED_QOS,
@@ -126,7 +137,7 @@ def message_class(topic: str) -> type:
     return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
-__all__ = ["CLOCK", "CLOCK_QOS", "DRIVE", "DRIVER_INPUT", "DRIVE_QOS", "FRAME_BODY",
+__all__ = ["CLOCK", "CLOCK_QOS", "DRIVE", "DRIVER_INPUT", "DRIVE_QOS", "EVENT_QOS", "FRAME_BODY",
            "FRAME_ODOM", "IMU", "JOY", "LATCHED_QOS", "LATCHED_RECORD_QOS", "MANEUVER_STATUS",
            "MARKERS", "NAMESPACE", "NODE_CONFIG", "NODE_NAMES", "ODOM", "REAR_STEER_CMD",
            "RECORDED_TOPICS", "RECORDER_STATUS", "ROBOT_DESCRIPTION", "RUN_CONFIG", "Role",

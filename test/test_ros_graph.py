@@ -18,6 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mcap.exceptions import McapError
+from mcap.records import Channel, Message
+from mcap.stream_reader import StreamReader
 
 from fourws_analysis.bag import load_bag
 from fourws_ros import graph_run, topics
@@ -218,6 +221,24 @@ def _node_processes(marker: str) -> list[int]:
     return pids
 
 
+def _states_on_disk(out: Path) -> int:
+    """States in the bag files under ``out`` as far as written (a file being recorded)."""
+    n = 0
+    for path in out.glob("*/bag/*.mcap"):
+        channels: dict[int, str] = {}
+        with open(path, "rb") as f:
+            try:
+                for record in StreamReader(f).records:
+                    if isinstance(record, Channel):
+                        channels[record.id] = record.topic
+                    elif isinstance(record, Message) and \
+                            channels.get(record.channel_id) == topics.STATE:
+                        n += 1
+            except McapError:  # the file ends mid-record while it is being written
+                pass
+    return n
+
+
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGKILL, -9)])
 def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
     import time
@@ -232,14 +253,15 @@ def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
                             stderr=subprocess.STDOUT, text=True)
     marker = f"{out}/"  # the node processes' --params-file lies in the run folder
     deadline = time.monotonic() + 60
-    # running: the recorder's periodic flushes have put ~100 messages (~370 B) on disk
-    while time.monotonic() < deadline and sum(
-            f.stat().st_size for f in out.glob("*/bag/*.mcap")) < 100 * 364:
+    # running: the recorder's periodic flushes (every 0.5 s simulated) have put states on
+    # disk (counted in the file, not its size: the robot description alone is ~40 kB)
+    while time.monotonic() < deadline and _states_on_disk(out) < 20:
         time.sleep(0.2)
     assert len(_node_processes(marker)) == 4  # simulator, maneuver, controller, recorder
+    grown = _states_on_disk(out) >= 20
     proc.send_signal(sig)
-    proc.communicate(timeout=60)
-    assert proc.returncode == code
+    said = proc.communicate(timeout=60)[0]
+    assert proc.returncode == code, said
     deadline = time.monotonic() + 20
     while _node_processes(marker) and time.monotonic() < deadline:
         time.sleep(0.2)
@@ -248,7 +270,10 @@ def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
     run = load_bag(bag, allow_incomplete=True)
     assert (bag / "metadata.yaml").is_file()  # finalized, even with the launcher killed
     state = run.topics[topics.STATE]
-    assert len(state) > 10  # the run up to the signal, at 100 Hz from t = 0
+    logs = "".join(f"--- {log.name}:\n" + "\n".join(log.read_text().splitlines()[-6:]) + "\n"
+                   for log in sorted(out.glob("*/logs/*.log")))
+    assert grown, f"the run did not get going within 60 s:\n{said}\n{logs}"
+    assert len(state) > 10, f"{said}\n{logs}"  # the run up to the signal, at 100 Hz from 0
     np.testing.assert_allclose(np.diff(state.time_s), 0.01, atol=1e-9)  # none lost
 
 
