@@ -60,9 +60,9 @@ NODE_EXIT_S = 40.0
 REALTIME_OVERRUN_S = 2.0
 #: Process name of the live view (``fourws run --live``).
 LIVE_VIEW = "fourws_live_view"
-#: SCHED_FIFO priority of a realtime run's answer chain (simulator, maneuver, controller), when
-#: permitted (timeliness only; the verdict never depends on it: a realtime run whose answers
-#: come late says so, as stale commands). Lockstep runs keep the normal scheduler.
+#: SCHED_FIFO priority of the answer chain (simulator, maneuver, controller), when permitted,
+#: except in a lockstep run with a live view (speed only; the verdict never depends on it: a
+#: realtime run whose answers come late says so, as stale commands).
 FIFO_PRIORITY = 10
 
 
@@ -359,12 +359,13 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
     why = wait_for_graph(config, group, ros, lambda: interrupt.set, recorded, replay)
     if why:
         return why
-    # the answer chain of a realtime run: its answers must come within the command freshness
-    # limit (the realtime thread raises itself higher). Not in lockstep, where only the pace
-    # would gain: three processes answering each other flat out at SCHED_FIFO took both cores
-    # of a two-core machine from everything else for the whole run (a live view beside a
-    # lockstep run then received 3 % of the frames, and the user's desktop froze).
-    if not config.lockstep:
+    # the answer chain: in lockstep it sets the pace, in realtime its answers must come
+    # within the command freshness limit (the realtime thread raises itself higher). Not for
+    # a lockstep run that someone watches live: its chain answering flat out at SCHED_FIFO
+    # took both cores of a two-core machine from the live view and its client (3 % of the
+    # frames reached the client in a test run; 80-100 % without FIFO beside a CPU hog); the
+    # watcher gets the CPU, the run goes slower (2.3x real time instead of 3.8-4.7x here)
+    if not (config.lockstep and group.has(LIVE_VIEW)):
         chain = [NODE_NAMES[Role.SIMULATOR], NODE_NAMES[Role.MANEUVER],
                  config.controller.node_name]
         granted = [set_fifo(c.proc.pid, FIFO_PRIORITY) for c in group.children
