@@ -70,7 +70,7 @@ def _publish_states(n: int, rate_hz: float, ctx, name: str = "state_source",
     pub = node.create_publisher(topics.message_class(topics.STATE), topics.STATE,
                                 topics.STREAM_QOS)
     status_pub = node.create_publisher(topics.message_class(topics.SIM_STATUS),
-                                       topics.SIM_STATUS, topics.STATUS_QOS)
+                                       topics.SIM_STATUS, topics.TOPIC_QOS[topics.SIM_STATUS])
     deadline = time.monotonic() + 30.0
     while (pub.get_subscription_count() < 1 or final and status_pub.get_subscription_count() < 1
            ) and time.monotonic() < deadline:
