@@ -68,10 +68,9 @@ from fourws_sim.errors import ParameterError
 STATUS_EVERY = 20
 #: Wall period of the recorder status and the pending-publisher lookups, s.
 STATUS_PERIOD_S = 0.1
-#: A publisher the ROS graph cannot name within UNIDENTIFIED_AFTER_S (wall time) is foreign;
-#: MAX_PENDING messages are kept per publisher meanwhile (fourws_ros.identity: one rule for
-#: the nodes that take messages by publisher).
-MAX_PENDING = MAX_HELD
+# A publisher the ROS graph cannot name within UNIDENTIFIED_AFTER_S (wall time) is foreign;
+# MAX_HELD messages are kept per publisher meanwhile (fourws_ros.identity: one rule for the
+# nodes that take messages by publisher).
 #: Once every writer has reported its final counts, a bag still incomplete with nothing held
 #: for identification and nothing received for this long (wall time) never completes: what
 #: is missing was lost (a reliable writer delivers what it has within a fraction of that), so
@@ -280,7 +279,7 @@ class RecorderNode(Node):
     # ------------------------------------------------------------------ publisher identity
     def _hold(self, gid: bytes, topic: str, data: bytes, seq: int) -> None:
         since, held = self._pending.setdefault(gid, (time.monotonic(), []))
-        if len(held) < MAX_PENDING:
+        if len(held) < MAX_HELD:
             held.append((topic, data, seq))
         else:
             self.ledger.on_message(topic, "", seq)  # counted foreign: unidentifiable

@@ -361,9 +361,7 @@ def scenario_from_mapping(data: Any, source: str = "<mapping>",
     integrator = _string(data, "integrator", "rk4", source)
     if integrator not in INTEGRATORS:
         raise UnknownNameError("integrator", str(integrator), list(INTEGRATORS), source)
-    if integrator == "semi_implicit_euler" and not str(model).startswith("8dof"):
-        raise ParameterError("integrator", f"semi_implicit_euler is for the 8dof models; "
-                             f"model {model} takes rk4 or euler", source)
+    INTEGRATORS[integrator].check_model(str(model), source)
     clock = _string(data, "clock_mode", "lockstep", source)
     if clock not in CLOCK_MODES:
         raise ParameterError("clock_mode", f"must be one of {', '.join(CLOCK_MODES)}, "

@@ -68,6 +68,18 @@ class Integrator:
     name: str
     compiled_name: str | None
     _advance: Callable[..., np.ndarray]
+    #: The models it can integrate (None: every model; names as ``fourws_sim.simulator``'s
+    #: ``EIGHT_DOF``, ``EIGHT_DOF_FREE``).
+    models: tuple[str, ...] | None = None
+
+    def check_model(self, model: str, source: str | None = None) -> None:
+        """Raise :class:`ParameterError` (field ``integrator``) if it cannot integrate
+        ``model`` (``semi_implicit_euler`` needs the 8-DOF models' split into pose and
+        rates)."""
+        if self.models is not None and model not in self.models:
+            raise ParameterError("integrator", f"{self.name} is for the "
+                                 f"{', '.join(self.models)} models (their pose and rates are "
+                                 f"split); model {model} takes rk4 or euler", source)
 
     def advance(self, f: Derivative, t: float, x: np.ndarray, u: np.ndarray, p: Any,
                 dt_s: float = DEFAULT_STEP_S, n_steps: int = 1) -> np.ndarray:
@@ -152,7 +164,7 @@ INTEGRATORS: dict[str, Integrator] = {
     "rk4": Integrator("rk4", "rk4", _rk4),
     "euler": Integrator("euler", "euler", _euler),
     "semi_implicit_euler": Integrator("semi_implicit_euler", "semi_implicit_euler",
-                                      _semi_implicit),
+                                      _semi_implicit, models=("8dof", "8dof-free")),
     "solve_ivp": Integrator("solve_ivp", None, _solve_ivp),
 }
 

@@ -146,10 +146,7 @@ class Simulator:
             raise ParameterError("dt_s", f"must be a finite number > 0, got {dt_s!r}")
         self.dt_s = float(dt_s)
         self._is_8dof = model in (EIGHT_DOF, EIGHT_DOF_FREE)
-        if integrator == "semi_implicit_euler" and not self._is_8dof:
-            raise ParameterError("integrator", f"semi_implicit_euler is for the {EIGHT_DOF} "
-                                 f"models (their pose and rates are split); {model} takes rk4 "
-                                 "or euler")
+        self.integrator.check_model(model)
         self._n_input = len(self.model.INPUT)
         self._u = np.zeros(self._n_input)
         self._u_shape = (self._n_input,)

@@ -58,11 +58,12 @@ def _start_recorder(bag: Path, *extra: str) -> subprocess.Popen:
 
 
 def _publish_states(n: int, rate_hz: float, ctx, name: str = "state_source",
-                    final: bool = False, keep: bool = False):
+                    final: bool = False, keep: bool = False, claimed: int | None = None):
     """Publish ``n`` VehicleState messages (step k, yaw rate k*1e-3, stamp k ms) at rate_hz
     from a node called ``name``; with ``final``, then a final SimulatorStatus with the counts
-    (what the simulator sends when a run ends). The node is destroyed (it leaves the graph)
-    unless ``keep``: then it is returned, still publishing."""
+    (what the simulator sends when a run ends; ``claimed`` states instead of ``n``: some were
+    lost). The node is destroyed (it leaves the graph) unless ``keep``: then it is returned,
+    still publishing."""
     import rclpy
     from rclpy.duration import Duration
 
@@ -88,7 +89,7 @@ def _publish_states(n: int, rate_hz: float, ctx, name: str = "state_source",
     if final:
         status = topics.message_class(topics.SIM_STATUS)()
         status.published_topics = [topics.SIM_STATUS, topics.STATE]
-        status.published_counts = [1, n]
+        status.published_counts = [1, n if claimed is None else claimed]
         status.final = True
         status.end_reason = "test"
         status_pub.publish(status)
@@ -105,6 +106,27 @@ _AS_SIMULATOR = ("-p", "simulator_node:=state_source",
 
 
 # ----------------------------------------------------------------------------- recorder
+def test_recorder_closes_a_bag_that_cannot_complete_after_the_final_counts(
+        tmp_path, rclpy_context):
+    """The final status claims 2005 states, 2000 came: once nothing more arrives for
+    INCOMPLETE_AFTER_END_S the recorder closes the bag incomplete by itself, exit 4, saying
+    what is missing (it waited for good before: a hand-started graph never ended)."""
+    bag = tmp_path / "bag"
+    proc = _start_recorder(bag, *_AS_SIMULATOR)
+    try:
+        _publish_states(2000, 2000.0, rclpy_context, final=True, claimed=2005)
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 4, out
+    assert b"every writer reported its final counts" in out, out
+    assert topics.STATE.encode() in out
+    run = load_bag(bag, allow_incomplete=True)
+    assert run.complete is False
+    assert len(run.topics[topics.STATE]) == 2000
+
+
 def test_recorder_closes_complete_bag_when_the_run_ends(tmp_path, rclpy_context):
     """States, then the simulator's final status with its counts: the recorder holds all 2001
     messages, closes the bag by itself as complete and exits 0 (no signal needed)."""
