@@ -196,6 +196,8 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
         record.outcome = Outcome.FAILED
         record.reason = ("recording incomplete: " + "; ".join(problems)
                          + _flooders(record.account))
+        if ambiguous:  # as above: the foreign answer applied is what the bag cannot hold
+            record.reason = _second_answers(ambiguous) + f"; then: {record.reason}"
     elif ambiguous:
         record.outcome = Outcome.FAILED
         record.reason = _second_answers(ambiguous)

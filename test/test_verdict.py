@@ -15,7 +15,7 @@ from fourws_run.closed_loop import run_closed_loop
 from fourws_run.config import RealtimeDemand, RunConfig
 from fourws_run.record import Outcome, RunRecord
 from fourws_run.scenario import load_scenario, scenario_from_mapping
-from fourws_run.verdict import ManeuverReport, SimReport, conclude
+from fourws_run.verdict import BagCheck, ManeuverReport, SimReport, conclude
 from fourws_sim.errors import ParameterError
 from fourws_sim.maneuvers import load_maneuver_spec, maneuver_spec_from_mapping
 from fourws_sim.outcome import (DEFAULT_LIMITS, DIVERGED, NO_BREACH, REVERSING_BREACH,
@@ -218,3 +218,21 @@ def test_a_recorder_that_never_completes_for_a_second_publisher_names_the_publis
     rec = _record(tmp_path)  # without second answers the recorder's failure stands alone
     conclude(rec, _config(), _sim(), done, False, late, None)
     assert rec.outcome == Outcome.FAILED and rec.reason == late
+
+
+def test_a_bag_incomplete_for_a_second_publisher_names_the_publisher_first(tmp_path):
+    """The same, when the recorder closed in time and the bag check finds the gap (the
+    launcher has no failure of its own): seen in a clean clone, 'recording incomplete:
+    /fourws/rear_steer_cmd: 4000 stored but the simulator applied 4001' alone."""
+    done = ManeuverReport("completed", "completed", True)
+    gap = "/fourws/rear_steer_cmd: 4000 stored but the simulator applied 4001"
+    second = {"/fourws/rear_steer_cmd: second answer to one state": 12}
+    rec = _record(tmp_path)
+    conclude(rec, _config(), _sim(rejections=second), done, False, "",
+             BagCheck(problems=[gap]))
+    assert rec.outcome == Outcome.FAILED
+    assert rec.reason.startswith("a second publisher answered states of this run (12x ")
+    assert rec.reason.endswith("; then: recording incomplete: " + gap)
+    rec = _record(tmp_path)
+    conclude(rec, _config(), _sim(), done, False, "", BagCheck(problems=[gap]))
+    assert rec.outcome == Outcome.FAILED and rec.reason == "recording incomplete: " + gap
