@@ -50,6 +50,23 @@ def set_fifo(pid: int, priority: int) -> bool:
     return True
 
 
+#: ``(cmd, env, log_fd, phase_fd) -> process or None``: starts a fourws node command
+#: instead of ``exec`` (None: it cannot, ``exec`` then), set by :func:`use_node_spawner`.
+_NODE_SPAWNER: list[Callable[[list[str], dict[str, str], int, int], Any]] = []
+
+
+def use_node_spawner(spawner: Callable[[list[str], dict[str, str], int, int], Any] | None,
+                     ) -> None:
+    """Start the fourws nodes of later runs with ``spawner`` (a process with the methods of
+    :class:`subprocess.Popen` the group uses, or None to ``exec`` that one); None: ``exec``
+    every node. The command line installs its node starter (:mod:`fourws_cli.node_starter`)."""
+    _NODE_SPAWNER[:] = [spawner] if spawner is not None else []
+
+
+def _spawned(cmd: list[str], env: dict[str, str], log_fd: int, phase_fd: int) -> Any:
+    return _NODE_SPAWNER[0](cmd, env, log_fd, phase_fd) if _NODE_SPAWNER else None
+
+
 def node_command(node: str, params_file: Path | None = None,
                  params: dict[str, Any] | None = None,
                  node_name: str | None = None) -> list[str]:
@@ -101,7 +118,8 @@ class Child:
     name: str
     cmd: list[str]
     log_path: Path
-    proc: subprocess.Popen[bytes] | None = None
+    #: A :class:`subprocess.Popen`, or what the node spawner returned (the same methods).
+    proc: Any = None
     phase: str = ""
     phase_at: float = 0.0
     #: Every phase reported, with its time (monotonic s).
@@ -238,10 +256,13 @@ class ProcessGroup:
         env = dict(self.env, **{PHASE_FD_ENV: str(write_fd)})
         try:
             with open(log_path, "wb") as log:
-                child.proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
-                                              stdin=subprocess.DEVNULL, env=env,
-                                              start_new_session=True, preexec_fn=_child_setup,
-                                              pass_fds=(write_fd,))
+                # a fourws node forked by the node spawner (its imports done once per
+                # launcher, fourws_cli.node_starter), else started as its own program
+                child.proc = _spawned(cmd, self.env, log.fileno(), write_fd) or \
+                    subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                     stdin=subprocess.DEVNULL, env=env,
+                                     start_new_session=True, preexec_fn=_child_setup,
+                                     pass_fds=(write_fd,))
         except OSError:
             os.close(read_fd)
             raise
@@ -351,4 +372,4 @@ class ProcessGroup:
 
 
 __all__ = ["Child", "LOG_TAIL_LINES", "ProcessGroup", "describe_exit", "node_command",
-           "ros_args", "set_fifo", "user_command"]
+           "ros_args", "set_fifo", "use_node_spawner", "user_command"]

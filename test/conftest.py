@@ -44,6 +44,20 @@ for _name in USER_ROS_ENVIRONMENT:
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 
+def _install_node_starter() -> None:
+    """The runs of the suite start their nodes as ``fourws run`` does: forked by the node
+    starter (started with the first node's environment). Not for a core-only session on a
+    machine without ROS."""
+    try:
+        from fourws_cli import node_starter
+        node_starter.install(start=False)
+    except ImportError:
+        pass
+
+
+_install_node_starter()
+
+
 @pytest.fixture(autouse=True)
 def _numba_cpu_features_kept():
     """``fourws study`` run in-process sets numba's CPU features to 512-bit vectors for its

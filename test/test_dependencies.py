@@ -66,6 +66,10 @@ PIP_ONLY: dict[str, str] = {
     "threadpoolctl": "threadpoolctl",
     # the live view's Foxglove WebSocket server (fourws run --live): no rosdep key either
     "foxglove": "foxglove-sdk",
+    # a forked node's command line as its process title (fourws_ros.node_starter): no key
+    # (rosdep/python.yaml at ros/rosdistro 000730d has none between python3-serial and
+    # python3-setuptools); optional, without it a forked node shows the starter's
+    "setproctitle": "setproctitle",
 }
 #: ROS packages imported only by the launch file: ``ros2 launch`` brings them on a system ROS
 #: install; they are not on PyPI (the venv uses ``fourws run`` instead).

@@ -1,0 +1,150 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
+"""A node forked by the node starter is what a node started with ``exec`` is to the launcher
+(fourws_cli.node_starter): its child, in its own session, with its command line, the run's
+environment, its log, its exit code and its signals; a starter that is gone or refuses
+leaves the node to be started as its own program, and nothing outlives its launcher."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from fourws_cli import node_starter
+from fourws_ros import processes
+from fourws_ros.processes import ProcessGroup, node_command
+from fourws_ros.runtime import EXIT_USER_ERROR
+
+pytestmark = pytest.mark.skipif(not node_starter.enabled(), reason="no node starter here")
+
+
+@pytest.fixture(autouse=True)
+def _installed():
+    """The suite's runs use the starter as ``fourws run`` does (conftest.py)."""
+    assert processes._NODE_SPAWNER == [node_starter.spawn]
+
+
+def _bad_params(tmp_path: Path) -> Path:
+    path = tmp_path / "bad.yaml"
+    path.write_text("fourws_simulator:\n  ros__parameters:\n    model: 9dof\n")
+    return path
+
+
+def _proc_status(pid: int) -> dict[str, str]:
+    out = {}
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        key, _, value = line.partition(":")
+        out[key] = value.strip()
+    return out
+
+
+def test_a_forked_node_is_the_launchers_child_with_its_own_session_and_title(
+        tmp_path, ros_domain):
+    group = ProcessGroup(tmp_path / "logs", dict(os.environ), print)
+    cmd = node_command("maneuver", params={"maneuver": "step_steer_85kmh"})
+    child = group.start("fourws_maneuver", cmd)
+    try:
+        assert isinstance(child.proc, node_starter.ForkedProcess)
+        pid = child.proc.pid
+        assert int(_proc_status(pid)["PPid"]) == os.getpid()
+        assert os.getpgid(pid) == pid and os.getsid(pid) == pid
+        cmdline = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+        assert cmdline.strip() == " ".join(cmd)
+        deadline = time.monotonic() + 60.0
+        while not child.phase_log and time.monotonic() < deadline:
+            group.read_phases()
+            time.sleep(0.01)
+        assert child.phase_log, "the node reported no start-up phase on its pipe"
+        assert child.alive()
+    finally:
+        codes = group.stop()
+    assert codes["fourws_maneuver"] == 0  # SIGINT: a clean stop
+
+
+def test_a_forked_nodes_refusal_is_its_exit_code_and_its_log(tmp_path):
+    group = ProcessGroup(tmp_path / "logs", dict(os.environ), print)
+    child = group.start("fourws_simulator", node_command("simulator", _bad_params(tmp_path)))
+    assert isinstance(child.proc, node_starter.ForkedProcess)
+    assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
+    log = child.log_tail()
+    assert "9dof" in log and "Traceback" not in log
+
+
+def test_a_killed_node_reports_the_signal(tmp_path, ros_domain):
+    group = ProcessGroup(tmp_path / "logs", dict(os.environ), print)
+    child = group.start("fourws_maneuver", node_command("maneuver"))
+    child.proc.send_signal(signal.SIGKILL)
+    assert child.proc.wait(timeout=60) == -signal.SIGKILL
+
+
+def test_another_environment_gets_another_starter(tmp_path):
+    node_starter.prestart()
+    before = node_starter._STARTER[0]
+    env = dict(os.environ, FOURWS_TEST_IMPORT_SETTING="1")  # as numba's settings are read
+    group = ProcessGroup(tmp_path / "logs", env, print)
+    child = group.start("fourws_simulator", node_command("simulator", _bad_params(tmp_path)))
+    assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
+    after = node_starter._STARTER[0]
+    assert after is not before and after.proc.pid != before.proc.pid
+    assert before.proc.poll() is not None  # the old one was stopped
+    assert after.env["FOURWS_TEST_IMPORT_SETTING"] == "1"
+    # a run's own variables (the domain) do not restart it
+    group = ProcessGroup(tmp_path / "logs2", dict(env, ROS_DOMAIN_ID="99"), print)
+    child = group.start("fourws_simulator", node_command("simulator", _bad_params(tmp_path)))
+    assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
+    assert node_starter._STARTER[0] is after
+
+
+def test_a_dead_starter_leaves_the_node_to_be_started_as_a_program(tmp_path):
+    node_starter.prestart()
+    starter = node_starter._STARTER[0]
+    starter.proc.kill()
+    starter.proc.wait()
+    group = ProcessGroup(tmp_path / "logs", dict(os.environ), print)
+    child = group.start("fourws_simulator", node_command("simulator", _bad_params(tmp_path)))
+    assert isinstance(child.proc, subprocess.Popen)
+    assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
+    # and the next node gets a new starter
+    child = group.start("fourws_simulator2", node_command("simulator", _bad_params(tmp_path)))
+    assert isinstance(child.proc, node_starter.ForkedProcess)
+    assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
+
+
+_LAUNCHER = textwrap.dedent("""
+    import os, sys, time
+    from pathlib import Path
+    from fourws_cli import node_starter
+    from fourws_ros.processes import ProcessGroup, node_command
+    node_starter.install()
+    group = ProcessGroup(Path(sys.argv[1]), dict(os.environ), print)
+    child = group.start("fourws_maneuver", node_command("maneuver"))
+    print(child.proc.pid, node_starter._STARTER[0].proc.pid, flush=True)
+    time.sleep(600)
+""")
+
+
+def test_nothing_outlives_a_killed_launcher(tmp_path, ros_domain):
+    proc = subprocess.Popen([sys.executable, "-c", _LAUNCHER, str(tmp_path / "logs")],
+                            stdout=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        node_pid, starter_pid = (int(x) for x in proc.stdout.readline().split())
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        deadline = time.monotonic() + 30.0
+        alive = [node_pid, starter_pid]
+        while alive and time.monotonic() < deadline:
+            alive = [p for p in alive if Path(f"/proc/{p}").exists()
+                     and _proc_status(p)["State"][0] != "Z"]
+            time.sleep(0.05)
+        assert alive == [], f"left running after the launcher was killed: {alive}"
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
