@@ -13,7 +13,10 @@ with the run's environment, in its own process, as a node started with ``exec`` 
 A forked node is the launcher's own child, as a started one is: the launcher is a child
 subreaper (``PR_SET_CHILD_SUBREAPER``), the starter forks an intermediate process that forks
 the node and exits at once, and the node is re-parented to the launcher, which waits for it
-(exit code, signal) as for any child. The node then takes the rest of what ``exec`` would have
+(exit code, signal) as for any child. A forked node runs only once the launcher has its
+pid: it waits for a byte on a pipe the launcher writes after the starter's answer, so a node
+forked by a starter that then failed to answer leaves at once instead of running beside the
+copy started in its place. The node then takes the rest of what ``exec`` would have
 given it: its own session and process group, the death signal when the launcher dies, the
 log file as stdout/stderr, the phase pipe, the run's environment, working folder, signal mask
 and ignored signals, fresh random seeds, and its command line as its process title (what
@@ -145,11 +148,17 @@ class NodeStarter:
             theirs.close()
 
     def _receive(self, timeout_s: float) -> dict[str, Any] | None:
-        ready, _, _ = select.select([self._sock], [], [], timeout_s)
-        if not ready:
-            return None
-        data = self._sock.recv(_MAX_MESSAGE)
-        return json.loads(data) if data else None
+        """The starter's next message; None if it ended, is stopped (SIGSTOP) or said
+        nothing within ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            ready, _, _ = select.select([self._sock], [], [], 0.1)
+            if ready:
+                data = self._sock.recv(_MAX_MESSAGE)
+                return json.loads(data) if data else None
+            if time.monotonic() > deadline or self.proc.poll() is not None \
+                    or _is_stopped(self.proc.pid):
+                return None
 
     def spawn(self, cmd: list[str], env: dict[str, str], log_fd: int, phase_fd: int,
               cwd: str) -> ForkedProcess | None:
@@ -162,20 +171,29 @@ class NodeStarter:
                    if signal.getsignal(s) is signal.SIG_IGN]
         request = {"cmd": cmd, "argv": cmd[4:], "env": env, "cwd": cwd,
                    "launcher": os.getpid(), "sigmask": sigmask, "ignored": ignored}
+        # the node runs only once this process has its pid: a node forked by a starter that
+        # then failed to answer reads end-of-file here and leaves (never a second copy)
+        go_r, go_w = os.pipe()
         try:
             if not self._ready:
                 hello = self._receive(READY_TIMEOUT_S)
                 if not hello or not hello.get("ready"):
                     raise OSError("the node starter did not get ready")
                 self._ready = True
-            socket.send_fds(self._sock, [json.dumps(request).encode()], [log_fd, phase_fd])
+            socket.send_fds(self._sock, [json.dumps(request).encode()],
+                            [log_fd, phase_fd, go_r])
             reply = self._receive(REPLY_TIMEOUT_S)
             if not reply or "pid" not in reply:
                 raise OSError((reply or {}).get("error", "the node starter did not answer"))
+            proc = ForkedProcess(int(reply["pid"]), cmd)
+            os.write(go_w, b"1")
         except (OSError, ValueError):
             self.close()
             return None
-        return ForkedProcess(int(reply["pid"]), cmd)
+        finally:
+            os.close(go_r)
+            os.close(go_w)
+        return proc
 
     def close(self) -> None:
         """Stop the starter (its nodes run on)."""
@@ -187,6 +205,14 @@ class NodeStarter:
         if self.proc.poll() is None:
             self.proc.kill()
         self.proc.wait()
+
+
+def _is_stopped(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[-1].split()[0] in ("T", "t")
+    except (OSError, IndexError):
+        return False
 
 
 def _starter_setup() -> None:
@@ -274,7 +300,7 @@ class _NodeJob:
 
     def run(self) -> int:
         req = self.request
-        log_fd, phase_fd = self.fds
+        log_fd, phase_fd, go_fd = self.fds
         # own session and process group first: the launcher signals the group by this pid
         os.setsid()
         ignored = set(req.get("ignored", []))
@@ -296,6 +322,10 @@ class _NodeJob:
         _prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
         if os.getppid() != launcher:  # the launcher died meanwhile
             return 1
+        go = os.read(go_fd, 1)  # the launcher has this pid (NodeStarter.spawn)
+        os.close(go_fd)
+        if go != b"1":
+            return 0
         devnull = os.open(os.devnull, os.O_RDONLY)
         os.dup2(devnull, 0)
         os.dup2(log_fd, 1)
@@ -381,15 +411,15 @@ def _serve(sock: socket.socket) -> _NodeJob | None:
     sock.send(json.dumps({"ready": True}).encode())
     while True:
         try:
-            data, fds, _flags, _addr = socket.recv_fds(sock, _MAX_MESSAGE, 2)
+            data, fds, _flags, _addr = socket.recv_fds(sock, _MAX_MESSAGE, 3)
         except OSError:
             return None
         if not data:
             return None
         try:
             request = json.loads(data)
-            if len(fds) != 2:
-                raise OSError("a request needs the log and phase descriptors")
+            if len(fds) != 3:
+                raise OSError("a request needs the log, phase and go descriptors")
             result = _fork_node(request, fds)
         except (OSError, ValueError, KeyError) as exc:
             for fd in fds:

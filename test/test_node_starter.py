@@ -7,8 +7,10 @@ leaves the node to be started as its own program, and nothing outlives its launc
 
 from __future__ import annotations
 
+import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import textwrap
@@ -148,3 +150,44 @@ def test_nothing_outlives_a_killed_launcher(tmp_path, ros_domain):
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
+
+
+def test_a_stopped_starter_leaves_the_node_to_be_started_as_a_program(tmp_path):
+    node_starter.prestart()
+    starter = node_starter._STARTER[0]
+    os.kill(starter.proc.pid, signal.SIGSTOP)
+    try:
+        group = ProcessGroup(tmp_path / "logs", dict(os.environ), print)
+        child = group.start("fourws_simulator", node_command("simulator", _bad_params(tmp_path)))
+        assert isinstance(child.proc, subprocess.Popen)
+        assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
+        assert starter.broken and starter.proc.poll() is not None  # stopped for good
+    finally:
+        if starter.proc.poll() is None:
+            os.kill(starter.proc.pid, signal.SIGKILL)
+
+
+def test_a_node_the_launcher_gave_up_on_leaves_without_running(tmp_path):
+    """The starter forked the node but its launcher did not take the answer (it timed out,
+    or the starter died first): the node must not run beside the copy started instead."""
+    node_starter.prestart()
+    starter = node_starter._STARTER[0]
+    assert starter._receive(node_starter.READY_TIMEOUT_S) == {"ready": True}
+    starter._ready = True
+    log = tmp_path / "node.log"
+    cmd = node_command("simulator", _bad_params(tmp_path))
+    request = {"cmd": cmd, "argv": cmd[4:], "env": dict(os.environ), "cwd": str(tmp_path),
+               "launcher": os.getpid(), "sigmask": [], "ignored": []}
+    phase_r, phase_w = os.pipe()
+    go_r, go_w = os.pipe()
+    with open(log, "wb") as f:
+        socket.send_fds(starter._sock, [json.dumps(request).encode()], [f.fileno(), phase_w, go_r])
+    os.close(go_r)
+    os.close(phase_w)
+    reply = starter._receive(node_starter.REPLY_TIMEOUT_S)
+    os.close(go_w)  # given up: no go
+    proc = node_starter.ForkedProcess(int(reply["pid"]), cmd)
+    assert proc.wait(timeout=60) == 0
+    assert log.read_bytes() == b""  # it never ran (a run refuses this file with exit 2)
+    assert os.read(phase_r, 100) == b""  # and reported no phase
+    os.close(phase_r)
