@@ -13,6 +13,9 @@
   nodes' launch to the start of the simulation (``RunRecord.startup_s``: processes started,
   imported, configured, kernels loaded, discovered and matched) and of the whole run
   (launch to the verified bag), median, min and max;
+* commands: as many default runs as a user starts them, ``fourws run --law fws`` in a new
+  process each (its own node starter): launch of the command to the simulation's start (its
+  "graph up" line) and to its exit, median, min and max;
 * the demo: ``--demo`` times ``fourws demo`` (three laws of the default scenario through the
   graph, then the report) as a user runs it.
 
@@ -121,6 +124,33 @@ def _startups(n: int, config, out: Path, quiet, extra: dict, result: dict) -> bo
     return ok
 
 
+#: What ``fourws run`` prints once the simulation has started (fourws_ros.graph_run).
+GRAPH_UP = "graph up after"
+
+
+def _commands(n: int, out: Path, result: dict) -> bool:
+    """``n`` default runs as a user starts them (``fourws run --law fws``, a new process and
+    node starter each): from the launch of the command to its "graph up" line (the
+    simulation's start) and to its exit, median, min and max."""
+    up, whole, ok = [], [], True
+    for k in range(n):
+        t0 = time.monotonic()
+        proc = subprocess.Popen([sys.executable, "-m", "fourws_cli.main", "run", "--law", "fws",
+                                 "--out", str(out / f"command{k}")], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, text=True, errors="replace")
+        for line in proc.stderr:  # type: ignore[union-attr]
+            if GRAPH_UP in line and len(up) == k:
+                up.append(time.monotonic() - t0)
+        ok &= proc.wait() == 0
+        whole.append(time.monotonic() - t0)
+    for name, values in (("command_startup_s", up), ("command_wall_s", whole)):
+        if values:
+            result.update({f"{name}_median": statistics.median(values),
+                           f"{name}_min": min(values), f"{name}_max": max(values)})
+    result["command_runs_ok"] = ok and len(up) == n
+    return ok and len(up) == n
+
+
 def _demo(out: Path, result: dict) -> bool:
     """Wall time of ``fourws demo`` into ``result``."""
     t0 = time.monotonic()
@@ -165,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         if args.startups > 0:
             ok &= _startups(args.startups, config, out, quiet, extra, result)
+            ok &= _commands(args.startups, out, result)
         if args.demo:
             ok &= _demo(out, result)
         if args.lockstep_seconds > 0:

@@ -300,8 +300,8 @@ def test_bench_graph_reports_a_realtime_run(tmp_path):
     """`fourws bench-graph` with only a realtime run (the soak command, shortened to 1 s):
     one JSON object whose realtime run is ok and complete, every recorded topic stored as
     published, states every 5 ms (200 Hz) with no gap, and the overrun times read from the
-    bag (a list); two start-up runs, each ok, whose start-up (launch to simulation start) is
-    part of its whole run. Timings are reported, not asserted."""
+    bag (a list); two start-up runs and two `fourws run` commands, each ok, whose start-up
+    (launch to simulation start) is part of its whole run. Timings are reported, not asserted."""
     res = subprocess.run([sys.executable, "-m", "fourws_cli.main", "bench-graph", "--json",
                           "--lockstep-seconds", "0", "--realtime-seconds", "1",
                           "--startups", "2",
@@ -320,3 +320,6 @@ def test_bench_graph_reports_a_realtime_run(tmp_path):
     # each run's start-up is part of it, so every order statistic is
     for stat in ("min", "median", "max"):
         assert out[f"startup_s_{stat}"] < out[f"startup_run_wall_s_{stat}"], stat
+        # and so is a command's: its graph came up before it exited
+        assert 0 < out[f"command_startup_s_{stat}"] < out[f"command_wall_s_{stat}"], stat
+    assert out["command_runs_ok"]
