@@ -5,9 +5,9 @@ the nodes of a run, so a run does not pay Python's imports once per node.
 
 Started as its own program (``python -m fourws_cli.node_starter FD``, a fresh interpreter:
 never a fork of a launcher that may hold a ROS context), it imports rclpy, numpy, numba, the
-messages and every node module of :data:`fourws_cli.nodes.NODES`, sets numba's compiler
-context up (its registries, about 0.6 s per process otherwise), and then forks one node per
-request. Nothing ROS-related is initialised in it: each node calls ``rclpy.init`` itself,
+messages and every node module of :data:`fourws_cli.nodes.NODES`, and then forks one node
+per request, having set numba's compiler context up (its registries, about 0.6 s per
+process otherwise). Nothing ROS-related is initialised in it: each node calls ``rclpy.init`` itself,
 with the run's environment, in its own process, as a node started with ``exec`` does.
 
 A forked node is the launcher's own child, as a started one is: the launcher is a child
@@ -61,8 +61,8 @@ RUN_VARIABLES = frozenset({
 ENABLE_ENV = "FOURWS_NODE_STARTER"
 #: Time the starter gets to import everything and answer its first request, s.
 READY_TIMEOUT_S = 60.0
-#: Time a started starter gets to answer a later request, s.
-REPLY_TIMEOUT_S = 10.0
+#: Time the starter gets to answer a later request (a fork: milliseconds), s.
+REPLY_TIMEOUT_S = 30.0
 #: A forked node waits this long to be re-parented to the launcher, s.
 REPARENT_TIMEOUT_S = 10.0
 
@@ -380,8 +380,8 @@ def _fork_node(request: dict[str, Any], fds: list[int]) -> int | _NodeJob:
 
 
 def _preload() -> None:
-    """Import every node's modules and set numba's compiler context up (a module that does
-    not import here is imported, and fails, in its node as it would have otherwise)."""
+    """Import every node's modules (a module that does not import here is imported, and
+    fails, in its node as it would have otherwise)."""
     # the starter's purpose: rclpy loaded once for every node
     importlib.import_module("rclpy")
     try:
@@ -396,6 +396,11 @@ def _preload() -> None:
             importlib.import_module(target.partition(":")[0])
         except Exception:  # noqa: BLE001 -- the node reports it when it runs
             pass
+
+
+def _compiler_context() -> None:
+    """Set numba's compiler context up (its registries), which loading a cached kernel
+    needs first."""
     try:
         from numba.core.registry import cpu_target  # numba: the starter's purpose
         cpu_target.typing_context.refresh()
@@ -408,6 +413,7 @@ def _serve(sock: socket.socket) -> _NodeJob | None:
     """Answer fork requests until the launcher closes its end; in a forked node, its job."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _preload()
+    _compiler_context()
     sock.send(json.dumps({"ready": True}).encode())
     while True:
         try:

@@ -245,8 +245,6 @@ class ProcessGroup:
         OSError
             The program cannot be run (not found, not executable).
         """
-        if not self.children:
-            self.started_at = time.monotonic()
         log_path = self.log_dir / f"{name}.log"
         if shutil.which(cmd[0], path=self.env.get("PATH")) is None and not Path(cmd[0]).is_file():
             raise FileNotFoundError(f"{cmd[0]!r}: command not found")
