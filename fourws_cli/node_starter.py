@@ -7,8 +7,9 @@ Started as its own program (``python -m fourws_cli.node_starter FD``, a fresh in
 never a fork of a launcher that may hold a ROS context), it imports rclpy, numpy, numba, the
 messages and every node module of :data:`fourws_cli.nodes.NODES`, and then forks one node
 per request, having set numba's compiler context up (its registries, about 0.6 s per
-process otherwise). Nothing ROS-related is initialised in it: each node calls ``rclpy.init`` itself,
-with the run's environment, in its own process, as a node started with ``exec`` does.
+process otherwise). Nothing ROS-related is initialised in it: each node calls
+``rclpy.init`` itself, with the run's environment, in its own process, as a node started
+with ``exec`` does.
 
 A forked node is the launcher's own child, as a started one is: the launcher is a child
 subreaper (``PR_SET_CHILD_SUBREAPER``), the starter forks an intermediate process that forks

@@ -18,7 +18,10 @@ The rules, in order (the first that applies decides):
    clock that did not continue it): ``failed`` -- the answers applied may be to its states;
 4. the simulator stopped the run: ``diverged`` (the simulation diverged, bag complete) or
    ``failed`` (a node stopped answering, a peer left, ...);
-5. the bag does not hold every message: ``failed``, naming what is missing and who flooded;
+5. the bag does not hold every message: ``failed``, naming what is missing and who flooded,
+   after the cause when one is known: a second publisher that answered states (6), or a
+   controller beyond its share (7; a stopped controller never delivers to a recorder that
+   matched its writer late);
 6. a second publisher answered states: ``failed``;
 7. the controller: lockstep ticks without a command, or in realtime more than
    ``realtime.max_stale_share`` of the ticks without a fresh command or of the commands
@@ -198,6 +201,10 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
                          + _flooders(record.account))
         if ambiguous:  # as above: the foreign answer applied is what the bag cannot hold
             record.reason = _second_answers(ambiguous) + f"; then: {record.reason}"
+        elif controller:
+            # a controller that stopped answering (stopped, hung) also never delivered what
+            # it had sent to a recorder that matched it late: the cause is the controller
+            record.reason = controller + f"; then: {record.reason}"
     elif ambiguous:
         record.outcome = Outcome.FAILED
         record.reason = _second_answers(ambiguous)

@@ -236,3 +236,25 @@ def test_a_bag_incomplete_for_a_second_publisher_names_the_publisher_first(tmp_p
     rec = _record(tmp_path)
     conclude(rec, _config(), _sim(), done, False, "", BagCheck(problems=[gap]))
     assert rec.outcome == Outcome.FAILED and rec.reason == "recording incomplete: " + gap
+
+
+def test_a_bag_incomplete_beside_a_silent_realtime_controller_names_the_controller_first(
+        tmp_path):
+    """Realtime, the controller stopped (SIGSTOP) just after the start: 400 of 500 ticks ran
+    without a fresh command, and the recorder, which had matched the controller's writer only
+    after it stopped, holds none of its 27 commands. The cause is the controller, named
+    first (seen beside the test suite: 'recording incomplete: /fourws/rear_steer_cmd: 0
+    stored but the simulator applied 27' alone)."""
+    done = ManeuverReport("completed", "completed", True)
+    gap = "/fourws/rear_steer_cmd: 0 stored but the simulator applied 27"
+    rec = _record(tmp_path)
+    conclude(rec, _config("realtime"), _sim(stale_commands=400, commands_accepted=27), done,
+             False, "", BagCheck(problems=[gap]))
+    assert rec.outcome == Outcome.FAILED
+    assert rec.reason.startswith("the controller node (fourws_controller): 400 of 500 "
+                                 "control ticks (80.0%) ran without a fresh command")
+    assert rec.reason.endswith("; then: recording incomplete: " + gap)
+    rec = _record(tmp_path)  # a controller within its share: the gap alone
+    conclude(rec, _config("realtime"), _sim(stale_commands=5), done, False, "",
+             BagCheck(problems=[gap]))
+    assert rec.reason == "recording incomplete: " + gap
