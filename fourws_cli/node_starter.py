@@ -27,8 +27,8 @@ The starter is used only when it reproduces ``exec`` exactly: a node's environme
 the starter's except for the variables only read when a node runs (:data:`RUN_VARIABLES`);
 with another environment the starter is restarted with it. A starter that cannot be started
 or does not answer (:data:`READY_TIMEOUT_S`) leaves the nodes to be started as before, as
-their own programs; ``FOURWS_NODE_STARTER=0`` does that always. Speed only: a node started
-either way behaves the same.
+their own programs. Off unless ``FOURWS_NODE_STARTER=1`` (:data:`ENABLE_ENV`). Speed only:
+a node started either way behaves the same.
 """
 
 from __future__ import annotations
@@ -58,7 +58,10 @@ RUN_VARIABLES = frozenset({
     "FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE", "FOURWS_PHASE_FD",
     "PATH", "PWD", "OLDPWD", "_",
 })
-#: Environment switch: ``0`` starts every node as its own program.
+#: Environment switch: ``1`` forks the nodes through a starter; anything else (the default)
+#: starts every node as its own program. Off by default: one run of the whole suite in a
+#: clean clone failed with it (an Ackermann-driven lockstep run whose recorder never got the
+#: driver's final report, 90 s), not understood yet; every other graph test passed with it.
 ENABLE_ENV = "FOURWS_NODE_STARTER"
 #: Time the starter gets to import everything and answer its first request, s.
 READY_TIMEOUT_S = 60.0
@@ -228,8 +231,8 @@ _SUBREAPER: list[bool] = []
 
 def enabled() -> bool:
     """Whether nodes may be forked by a starter here (Linux, a child subreaper possible,
-    :data:`ENABLE_ENV` not ``0``)."""
-    if os.environ.get(ENABLE_ENV, "1") == "0" or not sys.platform.startswith("linux"):
+    :data:`ENABLE_ENV` ``1``)."""
+    if os.environ.get(ENABLE_ENV, "0") != "1" or not sys.platform.startswith("linux"):
         return False
     if not _SUBREAPER:
         _SUBREAPER.append(_prctl(_PR_SET_CHILD_SUBREAPER, 1))

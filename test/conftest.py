@@ -46,8 +46,9 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 def _install_node_starter() -> None:
     """The runs of the suite start their nodes as ``fourws run`` does: forked by the node
-    starter (started with the first node's environment). Not for a core-only session on a
-    machine without ROS."""
+    starter when ``FOURWS_NODE_STARTER=1`` (off by default, fourws_cli.node_starter), started
+    with the first node's environment. Not for a core-only session on a machine without
+    ROS."""
     try:
         from fourws_cli import node_starter
         node_starter.install(start=False)

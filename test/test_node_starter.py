@@ -24,13 +24,20 @@ from fourws_ros import processes
 from fourws_ros.processes import ProcessGroup, node_command
 from fourws_ros.runtime import EXIT_USER_ERROR
 
-pytestmark = pytest.mark.skipif(not node_starter.enabled(), reason="no node starter here")
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
+                                reason="no node starter here")
 
 
 @pytest.fixture(autouse=True)
-def _installed():
-    """The suite's runs use the starter as ``fourws run`` does (conftest.py)."""
-    assert processes._NODE_SPAWNER == [node_starter.spawn]
+def _installed(monkeypatch):
+    """The starter switched on (FOURWS_NODE_STARTER=1; off by default) and installed as
+    ``fourws run`` installs it; off and stopped again after the test."""
+    monkeypatch.setenv(node_starter.ENABLE_ENV, "1")
+    assert node_starter.enabled()
+    node_starter.install(start=False)
+    yield
+    processes.use_node_spawner(None)
+    node_starter.shutdown()
 
 
 def _bad_params(tmp_path: Path) -> Path:
