@@ -103,6 +103,13 @@ def _overrun_times(bag_path) -> list[float]:
     return [float(t) for row in status.fields["overrun_times_s"] for t in row]
 
 
+def _spread(result: dict, name: str, values: list[float]) -> None:
+    """``name``'s median, min and max into ``result`` (nothing without values)."""
+    if values:
+        result.update({f"{name}_median": statistics.median(values),
+                       f"{name}_min": min(values), f"{name}_max": max(values)})
+
+
 def _startups(n: int, config, out: Path, quiet, extra: dict, result: dict) -> bool:
     """``n`` short lockstep runs: start-up and whole-run wall times into ``result``."""
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
@@ -116,10 +123,8 @@ def _startups(n: int, config, out: Path, quiet, extra: dict, result: dict) -> bo
         ok &= rec.ok
         if rec.startup_s > 0:
             startup.append(rec.startup_s)
-    for name, values in (("startup_s", startup), ("startup_run_wall_s", whole)):
-        if values:
-            result.update({f"{name}_median": statistics.median(values),
-                           f"{name}_min": min(values), f"{name}_max": max(values)})
+    _spread(result, "startup_s", startup)
+    _spread(result, "startup_run_wall_s", whole)
     result["startup_runs"] = n
     result["startup_runs_ok"] = ok
     return ok
@@ -144,10 +149,8 @@ def _commands(n: int, out: Path, result: dict) -> bool:
                 up.append(time.monotonic() - t0)
         ok &= proc.wait() == 0
         whole.append(time.monotonic() - t0)
-    for name, values in (("command_startup_s", up), ("command_wall_s", whole)):
-        if values:
-            result.update({f"{name}_median": statistics.median(values),
-                           f"{name}_min": min(values), f"{name}_max": max(values)})
+    _spread(result, "command_startup_s", up)
+    _spread(result, "command_wall_s", whole)
     result["command_runs_ok"] = ok and len(up) == n
     return ok and len(up) == n
 
@@ -223,11 +226,10 @@ def run(args: argparse.Namespace) -> int:
             try:
                 state = load_bag(rt.bag_path, topics=[topics.STATE],
                                  allow_incomplete=True).topics[topics.STATE]
-                times = [float(state.time_s[0]), float(state.time_s[-1])] if len(state) else []
                 n_states = len(state)
+                span = float(state.time_s[-1] - state.time_s[0]) if n_states > 1 else 0.0
             except (FourwsError, OSError, KeyError):  # no bag at all: the reason says why
-                times, n_states = [], 0
-            span = times[1] - times[0] if n_states > 1 else 0.0
+                n_states, span = 0, 0.0
             result.update({
                 "realtime_ok": rt.ok, "realtime_reason": rt.reason,
                 "realtime_sim_s": rt.sim_time_s,

@@ -279,10 +279,8 @@ def spawn(cmd: list[str], env: dict[str, str], log_fd: int, phase_fd: int,
         starter = _starter_for(env)
         if starter is None:
             return None
-        proc = starter.spawn(cmd, env, log_fd, phase_fd, cwd or os.getcwd())
-        if proc is None and _STARTER and _STARTER[0] is starter:
-            _STARTER.clear()
-        return proc
+        # a starter that failed is broken: the next node's _starter_for replaces it
+        return starter.spawn(cmd, env, log_fd, phase_fd, cwd or os.getcwd())
 
 
 def shutdown() -> None:
