@@ -36,6 +36,7 @@ from fourws_ros.domains import DomainError, domain_for_run, graph_env
 from fourws_ros.launcher_node import CLOSE_TIMEOUT_S, LauncherNode, RunState
 from fourws_ros.processes import (ProcessGroup, describe_exit, node_command, ros_args,
                                   set_fifo, user_command)
+from fourws_ros.runtime import TEARDOWN_BACKSTOP_S, TEARDOWN_TIMEOUT_S
 from fourws_ros.startup import wait_for_graph
 from fourws_run.bagfile import BagError, read_bag, verify_bag
 from fourws_run.codecs import CodecError, parse_rear_steer_command
@@ -53,6 +54,9 @@ STALL_TIMEOUT_S = 75.0
 #: After the simulation ended: how long (wall) the recorder may take to store everything and
 #: close the bag. A timeout fails the run; the bag is never closed short silently.
 RECORDER_GRACE_S = 90.0
+#: A recorder that closed the bag exits within its teardown limit (the node's own, and its
+#: backstop); later than this it is stuck and stopped, s.
+RECORDER_TEARDOWN_S = TEARDOWN_TIMEOUT_S + TEARDOWN_BACKSTOP_S + 3.0
 #: After the simulation ended: how long the nodes may take to deliver and exit, s.
 NODE_EXIT_S = 40.0
 #: Realtime: simulation time beyond the maneuver's duration after which a run the maneuver
@@ -441,6 +445,30 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
     return ""
 
 
+def _wait_recorder(group: ProcessGroup, rec: str, state: RunState,
+                   poll: Callable[[float], None], echo: Callable[[str], None]) -> list[str]:
+    """Wait up to :data:`RECORDER_GRACE_S` for the recorder to close the bag and exit; a
+    recorder that said it closed the bag but has not exited :data:`RECORDER_TEARDOWN_S` later
+    is stuck in its ROS teardown: stopped, not a failure (the verdict reads the bag from
+    disk). Returns ``[rec]`` if it neither exited nor closed the bag in time."""
+    deadline = time.monotonic() + RECORDER_GRACE_S
+    closed_at = None
+    recorder = group.child(rec)
+    while recorder.alive():
+        now = time.monotonic()
+        if closed_at is None and state.recorder is not None and state.recorder.closed:
+            closed_at = now
+        if closed_at is not None and now - closed_at > RECORDER_TEARDOWN_S:
+            echo(f"  {rec} closed the bag but did not exit within {RECORDER_TEARDOWN_S:.0f} s "
+                 "(stuck in its ROS teardown, or stopped); stopping it")
+            group.stop([rec], grace_s=1.0)
+            return []
+        if now > deadline or (closed_at is None and recorder.stopped()):
+            return [rec]  # (a stopped process cannot close the bag by itself)
+        poll(0.05)
+    return []
+
+
 def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             state: RunState, interrupt: _Interrupt, failure: str, bag_path: Path | None,
             names: _Names, echo: Callable[[str], None]) -> str:
@@ -472,7 +500,7 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             # closes the bag with what it has
             if bag_path is not None and group.has(rec) and (
                     state.maneuver_end is not None or not config.driver_node):
-                left = group.wait_exit([rec], RECORDER_GRACE_S, poll)
+                left = _wait_recorder(group, rec, state, poll, echo)
                 if left:
                     detail = (state.recorder.detail if state.recorder is not None
                               else "no recorder status")

@@ -24,11 +24,14 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from fourws_ros.runtime import (EXIT_INCOMPLETE, EXIT_PEERS, EXIT_RUN_STOPPED, EXIT_USER_ERROR,
-                                PHASE_FD_ENV)
+                                PHASE_FD_ENV, STACK_SIGNAL)
 
 _PR_SET_PDEATHSIG = 1
 #: How many lines of a failed node's log the launcher repeats.
 LOG_TAIL_LINES = 15
+#: How long a stuck node gets to write its stacks before it is killed, s; frames repeated.
+STACK_WAIT_S = 0.5
+STACK_LINES = 8
 
 
 def _child_setup() -> None:
@@ -347,12 +350,40 @@ class ProcessGroup:
                 proc.wait(timeout=grace_s)
             except subprocess.TimeoutExpired:
                 self.echo(f"  {child.name} ignored {signal.Signals(sig).name}, escalating")
+                if sig == signal.SIGTERM:
+                    self._echo_stack(child)
         # members of the group that outlived the leader
         try:
             os.killpg(proc.pid, signal.SIGKILL)
         except (ProcessLookupError, PermissionError):
             pass
         return proc.wait()
+
+    def _echo_stack(self, child: Child) -> None:
+        """Before a fourws node is killed (it ignored SIGINT and SIGTERM: stuck in C), have it
+        write its threads' stacks to its log (``runtime.STACK_SIGNAL``) and repeat where its
+        main thread is."""
+        if not child.phase_log:  # not a fourws node: the signal would only kill it
+            return
+        try:
+            start = child.log_path.stat().st_size
+            os.kill(child.proc.pid, STACK_SIGNAL)
+        except OSError:
+            return
+        time.sleep(STACK_WAIT_S)
+        try:
+            with child.log_path.open("rb") as f:
+                f.seek(start)
+                dump = f.read(64 * 1024).decode("utf-8", "replace").splitlines()
+        except OSError:
+            return
+        # faulthandler: "Current thread 0x... (most recent call first):" then its frames
+        current = [i for i, line in enumerate(dump) if line.startswith("Current thread")]
+        frames = dump[current[0]:current[0] + 1 + STACK_LINES] if current else []
+        for line in frames:
+            self.echo(f"    {line.strip()}")
+        if frames:
+            self.echo(f"    (every thread's stack: {child.log_path})")
 
     def exit_codes(self) -> dict[str, int | None]:
         """Exit code of every child (None while running)."""

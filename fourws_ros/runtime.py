@@ -25,6 +25,7 @@ the context shuts down.
 
 from __future__ import annotations
 
+import faulthandler
 import json
 import os
 import re
@@ -67,6 +68,8 @@ ANNOUNCE_FAILURE_S = 10.0
 #: its event thread), and a node that did its job must not hang: the process then exits
 #: with the code it had, s.
 TEARDOWN_TIMEOUT_S = 10.0
+#: How much longer the interpreter-free backstop of that limit waits, s.
+TEARDOWN_BACKSTOP_S = 2.0
 
 
 def report_phase(phase: str) -> None:
@@ -119,6 +122,10 @@ def _rcl_message(exc: BaseException) -> str:
     """An rcl error on one line, without the C source locations rcl appends
     (``..., at ./src/parser.c:263``)."""
     return re.sub(r",? at \S+:\d+", "", one_line(exc)).strip() or type(exc).__name__
+
+
+#: The signal on which a node writes every thread's stack to its log (see :func:`run_node`).
+STACK_SIGNAL = signal.SIGUSR1
 
 
 def _exit_after(seconds: float, code: int, name: str) -> None:
@@ -260,6 +267,10 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
     flag = _StopFlag()
     signal.signal(signal.SIGINT, flag)
     signal.signal(signal.SIGTERM, flag)
+    # a node that ignores SIGINT and SIGTERM is stuck in C (a Python handler runs only between
+    # bytecodes); the launcher sends STACK_SIGNAL before it kills it, and every thread's Python
+    # stack goes to the log (faulthandler's handler needs neither the GIL nor the stuck thread)
+    faulthandler.register(STACK_SIGNAL, all_threads=True, chain=False)
     report_phase("configuring")
     try:
         rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
@@ -307,6 +318,9 @@ def run_node(factory: Callable[[], Any], args: Sequence[str] | None = None,
             print(f"[{node.get_name()}] run stopped: {reason}", file=sys.stderr, flush=True)
             code = int(getattr(node, "exit_code", EXIT_RUN_STOPPED) or EXIT_RUN_STOPPED)
         _exit_after(TEARDOWN_TIMEOUT_S, code, node.get_name())
+        # and should that timer never get the interpreter (a teardown stuck in C that holds
+        # it), faulthandler's own thread writes every stack to the log and exits (code 1)
+        faulthandler.dump_traceback_later(TEARDOWN_TIMEOUT_S + TEARDOWN_BACKSTOP_S, exit=True)
         executor.remove_node(node)
         executor.shutdown(timeout_sec=1.0)
     finally:

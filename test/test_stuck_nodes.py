@@ -1,0 +1,103 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
+"""A fourws node stuck in C (a Fast DDS deadlock: eProsima/Fast-DDS#6502 is one) can neither
+run its Python signal handlers nor its teardown timer. Such a node still ends: the launcher,
+before it kills a node that ignored SIGINT and SIGTERM, has it write every thread's stack to
+its log and repeats where its main thread is; a teardown stuck while holding the interpreter
+ends by faulthandler's own thread; a recorder that closed its bag and then hangs costs the
+run its teardown limit, not the run."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+from fourws_ros import graph_run, runtime
+from fourws_ros.processes import ProcessGroup
+from fourws_run.config import RunConfig
+from fourws_run.scenario import load_scenario
+
+STUCK = Path(__file__).with_name("stuck_node.py")
+
+
+def test_a_node_stuck_in_c_is_killed_with_its_stack_repeated(tmp_path, ros_domain):
+    lines: list[str] = []
+    group = ProcessGroup(tmp_path / "logs", dict(os.environ), lines.append, grace_s=1.0)
+    child = group.start("fourws_stuck", [sys.executable, str(STUCK), "spin"])
+    deadline = time.monotonic() + 120.0
+    while child.phase != "ready" and time.monotonic() < deadline:  # it reports its phases
+        child.read_phases()
+        time.sleep(0.05)
+    assert child.phase == "ready"
+    time.sleep(0.5)  # its timer fired: stuck
+    codes = group.stop(["fourws_stuck"])
+    assert codes == {"fourws_stuck": -signal.SIGKILL}
+    assert "  fourws_stuck ignored SIGINT, escalating" in lines
+    assert "  fourws_stuck ignored SIGTERM, escalating" in lines
+    # the main thread's innermost frame is the deadlocking call, named with its file
+    frames = [line for line in lines if line.startswith("    ")]
+    assert frames[0].startswith("    Current thread"), lines
+    assert "stuck_node.py" in frames[1] and "deadlock_in_c" in frames[1], frames
+    assert frames[-1] == f"    (every thread's stack: {child.log_path})"
+    assert "deadlock_in_c" in child.log_path.read_text()
+
+
+def test_a_teardown_stuck_holding_the_interpreter_still_exits(tmp_path, ros_domain):
+    """No Python thread can run, so the teardown timer cannot: the interpreter-free backstop
+    exits with code 1 after TEARDOWN_TIMEOUT_S + TEARDOWN_BACKSTOP_S, the stacks in the log."""
+    group = ProcessGroup(tmp_path / "logs", dict(os.environ), print)
+    child = group.start("fourws_stuck", [sys.executable, str(STUCK), "teardown"])
+    limit = runtime.TEARDOWN_TIMEOUT_S + runtime.TEARDOWN_BACKSTOP_S
+    try:
+        code = child.proc.wait(timeout=120.0 + limit)
+    finally:
+        group.kill_all()
+    assert code == 1
+    log = child.log_path.read_text()
+    assert f"Timeout (0:00:{limit:02.0f})!" in log
+    assert "in destroy_node" in log and "deadlock_in_c" in log
+    assert "the ROS teardown did not finish" not in log  # the Python timer never ran
+
+
+def test_a_recorder_stopped_after_closing_its_bag_does_not_fail_the_run(
+        tmp_path, monkeypatch, capfd):
+    """The recorder is stopped (SIGSTOP) the moment it says it closed the bag, as a recorder
+    stuck in its ROS teardown: the run ends RECORDER_TEARDOWN_S later, ok, its bag complete
+    (read from disk), instead of failing after RECORDER_GRACE_S."""
+    monkeypatch.setattr(graph_run, "RECORDER_GRACE_S", 600.0)  # were it waited for: the test
+    stopped = threading.Event()
+
+    def stop_on_close(group) -> None:
+        rec = group.child("fourws_recorder")
+
+        def watch() -> None:
+            while rec.alive():
+                if "] closed " in rec.log_path.read_text(errors="replace"):
+                    try:
+                        os.kill(rec.proc.pid, signal.SIGSTOP)
+                        stopped.set()
+                    except ProcessLookupError:
+                        pass
+                    return
+                time.sleep(0.001)
+
+        threading.Thread(target=watch, daemon=True).start()
+
+    config = RunConfig.from_scenario(load_scenario("default"), "sol1")
+    for attempt in range(5):  # the recorder may exit before the watcher stops it
+        stopped.clear()
+        record = graph_run.run_graph(config, tmp_path / str(attempt), run_name="r",
+                                     on_running=stop_on_close)
+        if stopped.is_set():
+            break
+    assert stopped.is_set(), "the recorder always exited before it could be stopped"
+    assert record.ok, record.reason
+    assert record.complete
+    assert record.message_counts["/fourws/state"] == 501
+    # ended by the teardown rule, not by the grace of 600 s
+    assert (f"fourws_recorder closed the bag but did not exit within "
+            f"{graph_run.RECORDER_TEARDOWN_S:.0f} s") in capfd.readouterr().err
