@@ -33,7 +33,6 @@ a node started either way behaves the same.
 
 from __future__ import annotations
 
-import ctypes
 import importlib
 import io
 import json
@@ -49,6 +48,8 @@ import time
 from typing import Any
 
 from fourws_cli.nodes import NODES, _stopped_while_starting, run_node
+from fourws_ros.oslevel import (PR_SET_CHILD_SUBREAPER, PR_SET_PDEATHSIG, is_stopped, node_prefix,
+                                prctl)
 
 #: Variables a node reads only once it runs (rcl, Fast DDS, the launcher's phase pipe), which
 #: therefore may differ between the starter and the node it forks; any other difference
@@ -70,17 +71,7 @@ REPLY_TIMEOUT_S = 30.0
 #: A forked node waits this long to be re-parented to the launcher, s.
 REPARENT_TIMEOUT_S = 10.0
 
-_PR_SET_PDEATHSIG = 1
-_PR_SET_CHILD_SUBREAPER = 36
 _MAX_MESSAGE = 1 << 20
-
-
-def _prctl(option: int, value: int) -> bool:
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(option, value, 0, 0, 0) == 0
-    except OSError:
-        return False
 
 
 def _env_key(env: dict[str, str]) -> dict[str, str]:
@@ -89,7 +80,8 @@ def _env_key(env: dict[str, str]) -> dict[str, str]:
 
 def is_node_command(cmd: list[str]) -> bool:
     """Whether ``cmd`` is a fourws node of :func:`fourws_ros.processes.node_command`."""
-    return cmd[:4] == [sys.executable, "-m", "fourws_cli.main", "node"] and len(cmd) > 4
+    prefix = node_prefix()
+    return cmd[:len(prefix)] == prefix and len(cmd) > len(prefix)
 
 
 # ----------------------------------------------------------------------------- launcher side
@@ -161,7 +153,7 @@ class NodeStarter:
                 data = self._sock.recv(_MAX_MESSAGE)
                 return json.loads(data) if data else None
             if time.monotonic() > deadline or self.proc.poll() is not None \
-                    or _is_stopped(self.proc.pid):
+                    or is_stopped(self.proc.pid):
                 return None
 
     def spawn(self, cmd: list[str], env: dict[str, str], log_fd: int, phase_fd: int,
@@ -211,17 +203,9 @@ class NodeStarter:
         self.proc.wait()
 
 
-def _is_stopped(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().rsplit(")", 1)[-1].split()[0] in ("T", "t")
-    except (OSError, IndexError):
-        return False
-
-
 def _starter_setup() -> None:
     """In the starter before exec: SIGKILL when the launcher dies."""
-    _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
 _LOCK = threading.Lock()
@@ -235,7 +219,7 @@ def enabled() -> bool:
     if os.environ.get(ENABLE_ENV, "0") != "1" or not sys.platform.startswith("linux"):
         return False
     if not _SUBREAPER:
-        _SUBREAPER.append(_prctl(_PR_SET_CHILD_SUBREAPER, 1))
+        _SUBREAPER.append(prctl(PR_SET_CHILD_SUBREAPER, 1))
     return _SUBREAPER[0]
 
 
@@ -321,7 +305,7 @@ class _NodeJob:
             if time.monotonic() > deadline:
                 return 1
             time.sleep(0.0002)
-        _prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+        prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
         if os.getppid() != launcher:  # the launcher died meanwhile
             return 1
         go = os.read(go_fd, 1)  # the launcher has this pid (NodeStarter.spawn)

@@ -11,7 +11,6 @@ it can handle the signal.
 
 from __future__ import annotations
 
-import ctypes
 import os
 import re
 import shutil
@@ -23,10 +22,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from fourws_ros.oslevel import PR_SET_PDEATHSIG, is_stopped, node_prefix, prctl
 from fourws_ros.runtime import (EXIT_INCOMPLETE, EXIT_PEERS, EXIT_RUN_STOPPED, EXIT_USER_ERROR,
                                 PHASE_FD_ENV, STACK_SIGNAL)
 
-_PR_SET_PDEATHSIG = 1
 #: How many lines of a failed node's log the launcher repeats.
 LOG_TAIL_LINES = 15
 #: How long a stuck node gets to write its stacks before it is killed, s; frames repeated.
@@ -36,8 +35,7 @@ STACK_LINES = 8
 
 def _child_setup() -> None:
     """In the child before exec: die with the parent (SIGTERM)."""
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 def set_fifo(pid: int, priority: int) -> bool:
@@ -74,7 +72,7 @@ def node_command(node: str, params_file: Path | None = None,
                  params: dict[str, Any] | None = None,
                  node_name: str | None = None) -> list[str]:
     """Command line that runs fourws node ``node`` with a parameter file and overrides."""
-    cmd = [sys.executable, "-m", "fourws_cli.main", "node", node]
+    cmd = node_prefix() + [node]
     return cmd + ros_args(params_file, params, node_name)
 
 
@@ -159,13 +157,7 @@ class Child:
 
     def stopped(self) -> bool:
         """The process is stopped (SIGSTOP/SIGTSTP): alive but not running."""
-        if not self.alive() or self.proc is None:
-            return False
-        try:
-            stat = Path(f"/proc/{self.proc.pid}/stat").read_text()
-        except OSError:
-            return False
-        return stat.rsplit(")", 1)[-1].split()[0] in ("T", "t")
+        return self.alive() and self.proc is not None and is_stopped(self.proc.pid)
 
     def exit_code(self) -> int | None:
         """The exit code (None while it runs)."""
