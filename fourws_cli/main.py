@@ -100,6 +100,10 @@ def main(argv: list[str] | None = None) -> int:
             and not {"-h", "--help"} & set(argv):
         from fourws_cli.node_starter import install  # the standard library, then rclpy
         install()
+        # this process leaves right after its command (_leave_if_stuck): each run's launcher
+        # participant is kept, not destroyed (a Fast DDS destroy can deadlock for good)
+        from fourws_ros import launcher_node
+        launcher_node.KEEP_PARTICIPANTS = True
     # the batch kernel of a study (not its rerun through the node graph, whose nodes inherit
     # the environment) with 512-bit vectors; before anything is compiled (fourws_sim.lanes)
     if (argv[:1] == ["study"] and argv[1:2] != ["rerun"]) or (
@@ -131,9 +135,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _leave_if_stuck(code: int) -> int:
-    """``code``; but a process holding a ROS participant stuck in Fast DDS (see
-    ``fourws_ros.launcher_node.ABANDONED``) leaves at once with it: a normal exit destroys
-    the participant again and hangs."""
+    """``code``; but a process holding a launcher participant kept or stuck in Fast DDS (see
+    ``fourws_ros.launcher_node.ABANDONED``) leaves at once with it: a normal exit would
+    destroy the participant (and can hang)."""
     launcher = sys.modules.get("fourws_ros.launcher_node")
     if launcher is not None and launcher.ABANDONED:
         sys.stdout.flush()

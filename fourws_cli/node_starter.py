@@ -27,8 +27,8 @@ The starter is used only when it reproduces ``exec`` exactly: a node's environme
 the starter's except for the variables only read when a node runs (:data:`RUN_VARIABLES`);
 with another environment the starter is restarted with it. A starter that cannot be started
 or does not answer (:data:`READY_TIMEOUT_S`) leaves the nodes to be started as before, as
-their own programs. Off unless ``FOURWS_NODE_STARTER=1`` (:data:`ENABLE_ENV`). Speed only:
-a node started either way behaves the same.
+their own programs. On by default; ``FOURWS_NODE_STARTER=0`` (:data:`ENABLE_ENV`) starts every
+node as its own program. Speed only: a node started either way behaves the same.
 """
 
 from __future__ import annotations
@@ -215,8 +215,8 @@ _SUBREAPER: list[bool] = []
 
 def enabled() -> bool:
     """Whether nodes may be forked by a starter here (Linux, a child subreaper possible,
-    :data:`ENABLE_ENV` ``1``)."""
-    if os.environ.get(ENABLE_ENV, "0") != "1" or not sys.platform.startswith("linux"):
+    :data:`ENABLE_ENV` not ``0``)."""
+    if os.environ.get(ENABLE_ENV, "1") == "0" or not sys.platform.startswith("linux"):
         return False
     if not _SUBREAPER:
         _SUBREAPER.append(prctl(PR_SET_CHILD_SUBREAPER, 1))

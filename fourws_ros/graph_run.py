@@ -33,7 +33,7 @@ from typing import Any, Callable
 
 from fourws_ros import node_params, topics
 from fourws_ros.domains import DomainError, domain_for_run, graph_env
-from fourws_ros.launcher_node import CLOSE_TIMEOUT_S, LauncherNode, RunState
+from fourws_ros.launcher_node import CLOSE_TIMEOUT_S, CLOSED, STUCK, LauncherNode, RunState
 from fourws_ros.processes import (ProcessGroup, describe_exit, node_command, ros_args,
                                   set_fifo, user_command)
 from fourws_ros.runtime import TEARDOWN_BACKSTOP_S, TEARDOWN_TIMEOUT_S
@@ -220,20 +220,23 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         finally:
             failure = _finish(config, group, ros, state, interrupt, failure, bag_path, names,
                               echo)
-            if ros is not None and not ros.close(keep=lease):  # stuck: the lease is kept
-                echo(f"  note: the launcher's ROS participant did not close within "
-                     f"{CLOSE_TIMEOUT_S:.0f} s (a Fast DDS deadlock); domain {lease.domain_id} "
-                     "held until this process exits")
-            else:
-                lease.release()
         record.exit_codes = group.exit_codes()
-    if state.t_start:
-        record.wall_time_s = max(state.t_end - state.t_start, 0.0)
-        record.startup_s = max(state.t_start - group.started_at, 0.0)
-    conclude(record, config, state.sim_report(), state.maneuver_report(), interrupt.set,
-             _with_last_words(failure, state), _check_bag(record.bag_path))
-    _label_user_law(record, config)
-    _write_record(record, echo)
+        if state.t_start:
+            record.wall_time_s = max(state.t_end - state.t_start, 0.0)
+            record.startup_s = max(state.t_start - group.started_at, 0.0)
+        conclude(record, config, state.sim_report(), state.maneuver_report(), interrupt.set,
+                 _with_last_words(failure, state), _check_bag(record.bag_path))
+        _label_user_law(record, config)
+        _write_record(record, echo)
+        # the verdict is on disk before the launcher's participant is closed (a close that
+        # never ends cannot take it along)
+        closed = ros.close(keep=lease) if ros is not None else CLOSED
+        if closed == STUCK:  # the lease is kept with the stuck participant
+            echo(f"  note: the launcher's ROS participant did not close within "
+                 f"{CLOSE_TIMEOUT_S:.0f} s (a Fast DDS deadlock); domain {lease.domain_id} "
+                 "held until this process exits")
+        elif closed == CLOSED:
+            lease.release()
     return record
 
 

@@ -11,6 +11,7 @@ answer can say what that node was waiting for.
 
 from __future__ import annotations
 
+import faulthandler
 import os
 import threading
 import time
@@ -42,10 +43,26 @@ _KEPT_LEVELS = (Log.WARN, Log.ERROR, Log.FATAL)
 #: ever (seen as a run whose recorder was killed ended). The run's outcome is known by
 #: then; the teardown is left to its thread.
 CLOSE_TIMEOUT_S = 10.0
-#: Launcher nodes whose close did not end (their participants are stuck in Fast DDS), each
-#: with what it keeps held: kept alive, never destroyed; a process holding one leaves with
-#: ``os._exit`` (exiting normally would destroy the stuck participant again and hang).
+#: The closing thread can hold the interpreter while it is stuck (rclpy's destroy calls keep
+#: it): then no Python code runs again, the timeout above included, and the process hung for
+#: good after a complete run (seen: a ``fourws run`` whose nodes had all exited). This much
+#: later faulthandler's own thread, which needs no interpreter, writes every stack to stderr
+#: and exits the process with code 1; the run's record is written before the close, s.
+CLOSE_BACKSTOP_S = 5.0
+#: Launcher nodes not destroyed (their participants stuck in Fast DDS, or kept, see
+#: :data:`KEEP_PARTICIPANTS`), each with what it keeps held (the run's domain lease): a
+#: process holding one leaves with ``os._exit`` (exiting normally would destroy them).
 ABANDONED: list[tuple["LauncherNode", Any]] = []
+#: Keep each run's launcher participant instead of destroying it. The command line sets it:
+#: its process ends right after its command (``os._exit``), so nothing of it needs to be
+#: destroyed, and a destroy that can deadlock is never attempted. A process that runs many
+#: runs (the test suite, a user's script through :mod:`fourws_api`) destroys them.
+KEEP_PARTICIPANTS = False
+#: Arm the backstop of :data:`CLOSE_BACKSTOP_S` (faulthandler has one such timer per process:
+#: the test suite, whose own per-test timer covers the same case, switches it off).
+CLOSE_BACKSTOP = True
+#: What :meth:`LauncherNode.close` did.
+CLOSED, KEPT, STUCK = "closed", "kept", "stuck"
 
 
 @dataclass
@@ -126,8 +143,10 @@ class LauncherNode:
             self.context = Context()
             rclpy.init(args=[], context=self.context, domain_id=domain_id,
                        signal_handler_options=SignalHandlerOptions.NO)
+            # no parameter services: fewer entities to destroy at the close (above)
             self.node = rclpy.create_node(topics.NODE_NAMES[Role.LAUNCHER],
-                                          context=self.context, enable_rosout=False)
+                                          context=self.context, enable_rosout=False,
+                                          start_parameter_services=False)
         finally:
             for key, value in saved.items():
                 if value is None:
@@ -217,11 +236,16 @@ class LauncherNode:
         self.executor.spin_until_future_complete(future, timeout_sec=10.0)
         return future.done()
 
-    def close(self, keep: Any = None) -> bool:
-        """Destroy the node and its context; False if that did not end within
-        :data:`CLOSE_TIMEOUT_S`: the participant is then left as it is, kept in
-        :data:`ABANDONED` with ``keep`` (the run's domain lease: a next run in this process must
-        not meet the stuck participant)."""
+    def close(self, keep: Any = None) -> str:
+        """Destroy the node and its context (:data:`CLOSED`); with :data:`KEEP_PARTICIPANTS`
+        keep it instead (:data:`KEPT`); :data:`STUCK` if the destroy did not end within
+        :data:`CLOSE_TIMEOUT_S`. A kept or stuck participant is left as it is, in
+        :data:`ABANDONED` with ``keep`` (the run's domain lease: a next run in this process
+        must not meet it). A destroy stuck holding the interpreter ends the process
+        (:data:`CLOSE_BACKSTOP_S`)."""
+        if KEEP_PARTICIPANTS:
+            ABANDONED.append((self, keep))
+            return KEPT
         done = threading.Event()
 
         def teardown() -> None:
@@ -230,12 +254,20 @@ class LauncherNode:
             self.context.try_shutdown()
             done.set()
 
-        thread = threading.Thread(target=teardown, daemon=True, name="fourws-launcher-close")
-        thread.start()
-        if done.wait(CLOSE_TIMEOUT_S):
-            return True
+        backstop = CLOSE_BACKSTOP
+        if backstop:
+            faulthandler.dump_traceback_later(CLOSE_TIMEOUT_S + CLOSE_BACKSTOP_S, exit=True)
+        try:
+            thread = threading.Thread(target=teardown, daemon=True, name="fourws-launcher-close")
+            thread.start()
+            if done.wait(CLOSE_TIMEOUT_S):
+                return CLOSED
+        finally:
+            if backstop:
+                faulthandler.cancel_dump_traceback_later()
         ABANDONED.append((self, keep))
-        return False
+        return STUCK
 
 
-__all__ = ["ABANDONED", "CLOSE_TIMEOUT_S", "LauncherNode", "RunState"]
+__all__ = ["ABANDONED", "CLOSED", "CLOSE_BACKSTOP", "CLOSE_BACKSTOP_S", "CLOSE_TIMEOUT_S",
+           "KEEP_PARTICIPANTS", "KEPT", "LauncherNode", "RunState", "STUCK"]

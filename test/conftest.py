@@ -46,7 +46,7 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 def _install_node_starter() -> None:
     """The runs of the suite start their nodes as ``fourws run`` does: forked by the node
-    starter when ``FOURWS_NODE_STARTER=1`` (off by default, fourws_cli.node_starter), started
+    starter unless ``FOURWS_NODE_STARTER=0`` (fourws_cli.node_starter), started
     with the first node's environment. Not for a core-only session on a machine without
     ROS."""
     try:
@@ -57,6 +57,20 @@ def _install_node_starter() -> None:
 
 
 _install_node_starter()
+
+
+def _launcher_backstop_off() -> None:
+    """The launcher's close has a process-wide faulthandler timer (launcher_node
+    CLOSE_BACKSTOP); the suite's own per-test timer (HARD_TIMEOUT_S below) covers the same
+    case, and faulthandler has one timer per process."""
+    try:
+        from fourws_ros import launcher_node
+        launcher_node.CLOSE_BACKSTOP = False
+    except ImportError:
+        pass
+
+
+_launcher_backstop_off()
 
 
 @pytest.fixture(autouse=True)

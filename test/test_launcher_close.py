@@ -32,7 +32,7 @@ def test_a_stuck_close_returns_after_its_timeout_and_keeps_the_lease(monkeypatch
     release = threading.Event()
     fake = _stuck_launcher(release)
     t0 = time.monotonic()
-    assert launcher_node.LauncherNode.close(fake, keep="the lease") is False
+    assert launcher_node.LauncherNode.close(fake, keep="the lease") == launcher_node.STUCK
     assert time.monotonic() - t0 >= 0.3  # it waited its timeout, no less
     assert launcher_node.ABANDONED == [(fake, "the lease")]
     assert fake.calls == []  # nothing destroyed past the stuck call
@@ -44,8 +44,44 @@ def test_a_close_that_ends_keeps_nothing(monkeypatch):
     release = threading.Event()
     release.set()
     fake = _stuck_launcher(release)
-    assert launcher_node.LauncherNode.close(fake, keep="the lease") is True
+    assert launcher_node.LauncherNode.close(fake, keep="the lease") == launcher_node.CLOSED
     assert fake.calls == ["node", "context"] and launcher_node.ABANDONED == []
+
+
+def test_the_command_lines_participants_are_kept_not_destroyed(monkeypatch):
+    """KEEP_PARTICIPANTS (set by fourws for its graph commands, which leave with os._exit):
+    nothing is destroyed, the participant and its lease are kept."""
+    monkeypatch.setattr(launcher_node, "ABANDONED", [])
+    monkeypatch.setattr(launcher_node, "KEEP_PARTICIPANTS", True)
+    fake = _stuck_launcher(threading.Event())  # a destroy would block this test for ever
+    assert launcher_node.LauncherNode.close(fake, keep="the lease") == launcher_node.KEPT
+    assert fake.calls == [] and launcher_node.ABANDONED == [(fake, "the lease")]
+
+
+def test_a_close_stuck_holding_the_interpreter_ends_the_process():
+    """The destroy deadlocks in C holding the interpreter (no Python code runs again, the
+    close's own timeout included): faulthandler's thread writes the stacks and exits, code 1,
+    CLOSE_TIMEOUT_S + CLOSE_BACKSTOP_S later, instead of a process that never ends."""
+    code = (
+        "import ctypes, types\n"
+        "from fourws_ros import launcher_node\n"
+        "launcher_node.CLOSE_TIMEOUT_S, launcher_node.CLOSE_BACKSTOP_S = 0.2, 0.5\n"
+        "def stuck_destroy():\n"
+        "    libc, mutex = ctypes.PyDLL(None), ctypes.create_string_buffer(64)\n"
+        "    libc.pthread_mutex_lock(mutex)\n"
+        "    libc.pthread_mutex_lock(mutex)\n"
+        "fake = types.SimpleNamespace(\n"
+        "    executor=types.SimpleNamespace(shutdown=lambda timeout_sec: None),\n"
+        "    node=types.SimpleNamespace(destroy_node=stuck_destroy),\n"
+        "    context=types.SimpleNamespace(try_shutdown=lambda: None))\n"
+        "launcher_node.LauncherNode.close(fake)\n"
+        "print('never here')\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 1, res.stderr
+    assert "never here" not in res.stdout
+    assert "Timeout (0:00:00.700000)!" in res.stderr
+    assert "in stuck_destroy" in res.stderr
 
 
 def test_fourws_leaves_with_its_exit_code_while_holding_a_stuck_participant():

@@ -30,14 +30,16 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
 
 @pytest.fixture(autouse=True)
 def _installed(monkeypatch):
-    """The starter switched on (FOURWS_NODE_STARTER=1; off by default) and installed as
-    ``fourws run`` installs it; off and stopped again after the test."""
+    """The starter switched on (FOURWS_NODE_STARTER=1, whatever the suite runs with) and
+    installed as ``fourws run`` installs it; stopped after the test, and the suite's own
+    installation (conftest) given back for the tests after this file."""
+    suite_spawner = list(processes._NODE_SPAWNER)
     monkeypatch.setenv(node_starter.ENABLE_ENV, "1")
     assert node_starter.enabled()
     node_starter.install(start=False)
     yield
-    processes.use_node_spawner(None)
     node_starter.shutdown()
+    processes.use_node_spawner(suite_spawner[0] if suite_spawner else None)
 
 
 def _bad_params(tmp_path: Path) -> Path:
@@ -84,6 +86,18 @@ def test_a_forked_nodes_refusal_is_its_exit_code_and_its_log(tmp_path):
     assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
     log = child.log_tail()
     assert "9dof" in log and "Traceback" not in log
+
+
+def test_zero_starts_every_node_as_its_own_program(tmp_path, monkeypatch):
+    """FOURWS_NODE_STARTER=0 (the starter is on by default): the node is exec'd, a Popen."""
+    monkeypatch.setenv(node_starter.ENABLE_ENV, "0")
+    assert not node_starter.enabled()
+    group = ProcessGroup(tmp_path / "logs", dict(os.environ), print)
+    child = group.start("fourws_simulator", node_command("simulator", _bad_params(tmp_path)))
+    assert isinstance(child.proc, subprocess.Popen)
+    assert child.proc.wait(timeout=120) == EXIT_USER_ERROR
+    monkeypatch.delenv(node_starter.ENABLE_ENV)
+    assert node_starter.enabled()  # unset: on
 
 
 def test_a_killed_node_reports_the_signal(tmp_path, ros_domain):

@@ -9,6 +9,7 @@ run its teardown limit, not the run."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sys
@@ -101,3 +102,22 @@ def test_a_recorder_stopped_after_closing_its_bag_does_not_fail_the_run(
     # ended by the teardown rule, not by the grace of 600 s
     assert (f"fourws_recorder closed the bag but did not exit within "
             f"{graph_run.RECORDER_TEARDOWN_S:.0f} s") in capfd.readouterr().err
+
+
+def test_the_record_is_on_disk_before_the_launchers_participant_closes(tmp_path, monkeypatch):
+    """A close that never ends (a Fast DDS deadlock holding the interpreter ends the process)
+    cannot take the run's verdict along: run.json is complete when the close begins."""
+    from fourws_ros import launcher_node
+    seen = []
+    close = launcher_node.LauncherNode.close
+
+    def checked_close(self, keep=None):
+        record = json.loads((tmp_path / "r" / "run.json").read_text())
+        seen.append((record["outcome"], record["message_counts"]["/fourws/state"]))
+        return close(self, keep)
+
+    monkeypatch.setattr(launcher_node.LauncherNode, "close", checked_close)
+    config = RunConfig.from_scenario(load_scenario("default"), "fws")
+    record = graph_run.run_graph(config, tmp_path, run_name="r")
+    assert record.ok, record.reason
+    assert seen == [(record.outcome.value, 501)] and record.outcome.value == "completed"
