@@ -26,6 +26,12 @@ def _stuck_launcher(release: threading.Event) -> types.SimpleNamespace:
         context=types.SimpleNamespace(try_shutdown=lambda: calls.append("context")))
 
 
+def _python(code: str) -> subprocess.CompletedProcess:
+    """``code`` run by a fresh interpreter, its output captured."""
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+
+
 def test_a_stuck_close_returns_after_its_timeout_and_keeps_the_lease(monkeypatch):
     monkeypatch.setattr(launcher_node, "CLOSE_TIMEOUT_S", 0.3)
     monkeypatch.setattr(launcher_node, "ABANDONED", [])
@@ -76,8 +82,7 @@ def test_a_close_stuck_holding_the_interpreter_ends_the_process():
         "    context=types.SimpleNamespace(try_shutdown=lambda: None))\n"
         "launcher_node.LauncherNode.close(fake)\n"
         "print('never here')\n")
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120)
+    res = _python(code)
     assert res.returncode == 1, res.stderr
     assert "never here" not in res.stdout
     assert "Timeout (0:00:00.700000)!" in res.stderr
@@ -96,7 +101,6 @@ def test_fourws_leaves_with_its_exit_code_while_holding_a_stuck_participant():
         "launcher_node.ABANDONED.append((object(), None))\n"
         "print('summary line', end='')\n"
         "_leave_if_stuck(3)\n")
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120)
+    res = _python(code)
     assert res.returncode == 3, res.stderr
     assert res.stdout == "summary line"
