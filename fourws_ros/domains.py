@@ -122,29 +122,21 @@ def domain_for_run(environ: dict[str, str] | None = None) -> DomainLease:
 #: Fast DDS settings of a run (``config/dds/fastdds.xml``: a reliable writer's heartbeat every
 #: 20 ms instead of 3 s, so a message lost in a transport queue is asked for again at once).
 DDS_PROFILES = CONFIG_DIR / "dds" / "fastdds.xml"
-#: The launcher's own participant (``config/dds/launcher.xml``: the same writers, no periodic
-#: announcement and an infinite lease, so its event thread has no announcement to deadlock
-#: in when the run's nodes leave; the file says why).
-LAUNCHER_DDS_PROFILES = CONFIG_DIR / "dds" / "launcher.xml"
 _DDS_PROFILES_VARS = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE")
 
 
-def graph_env(domain_id: int, base: dict[str, str] | None = None,
-              launcher: bool = False) -> dict[str, str]:
+def graph_env(domain_id: int, base: dict[str, str] | None = None) -> dict[str, str]:
     """Environment of a node process: the run's domain, discovery on this machine only, the
-    run's Fast DDS settings (unless the user gave a profiles file of their own; ``launcher``:
-    those of the launcher's participant)."""
+    run's Fast DDS settings (unless the user gave a profiles file of their own)."""
     env = dict(os.environ if base is None else base)
     env["ROS_DOMAIN_ID"] = str(domain_id)
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     env.pop("ROS_STATIC_PEERS", None)
     env["PYTHONUNBUFFERED"] = "1"
-    profiles = LAUNCHER_DDS_PROFILES if launcher else DDS_PROFILES
-    if not any(env.get(var) for var in _DDS_PROFILES_VARS) and profiles.is_file():
-        env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(profiles)
+    if not any(env.get(var) for var in _DDS_PROFILES_VARS) and DDS_PROFILES.is_file():
+        env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILES)
     return env
 
 
-__all__ = ["DDS_PROFILES", "DOMAIN_ID_RANGE", "DomainError", "DomainLease",
-           "LAUNCHER_DDS_PROFILES", "MAX_DOMAIN_ID",
+__all__ = ["DDS_PROFILES", "DOMAIN_ID_RANGE", "DomainError", "DomainLease", "MAX_DOMAIN_ID",
            "domain_for_run", "graph_env", "reserve_domain_id"]

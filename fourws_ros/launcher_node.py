@@ -130,7 +130,7 @@ class LauncherNode:
         # the domain goes to rclpy.init; the run's discovery range and DDS profile are in the
         # environment only while the participant is created: the process keeps the user's
         # (a later run in this process, or the caller, must see what the user set, not ours)
-        run_env = graph_env(domain_id, launcher=True)
+        run_env = graph_env(domain_id)
         keys = ("ROS_AUTOMATIC_DISCOVERY_RANGE", "FASTDDS_DEFAULT_PROFILES_FILE",
                 "ROS_STATIC_PEERS")
         saved = {key: os.environ.get(key) for key in keys}
