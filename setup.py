@@ -40,7 +40,7 @@ setup(
     description="Real-time 4WS vehicle-dynamics simulator and analysis as a ROS 2 node graph",
     license="Apache-2.0",
     entry_points={
-        "console_scripts": ["fourws = fourws_cli.main:main"]
+        "console_scripts": ["fourws = fourws_cli.main:entry"]
         # through fourws_cli.nodes, which handles a stop while the node is still importing
         + [f"fourws-{name} = fourws_cli.nodes:entry.{name}" for name in NODES],
     },

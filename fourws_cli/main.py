@@ -88,8 +88,11 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the ``fourws`` command line; returns the exit code."""
+def main(argv: list[str] | None = None, *, own_process: bool = False) -> int:
+    """Run the ``fourws`` command line; returns the exit code. ``own_process``: this is the
+    process's own command (:func:`entry`): it leaves right after, so the runs' launcher
+    participants are kept instead of destroyed, and the process leaves with ``os._exit``
+    while it holds one (a caller in the same process, such as a test, gets neither)."""
     argv = sys.argv[1:] if argv is None else argv
     # `fourws node NAME ...` hands everything after NAME to the node untouched (--ros-args ...)
     if len(argv) >= 1 and argv[0] == "node":
@@ -100,10 +103,11 @@ def main(argv: list[str] | None = None) -> int:
             and not {"-h", "--help"} & set(argv):
         from fourws_cli.node_starter import install  # the standard library, then rclpy
         install()
-        # this process leaves right after its command (_leave_if_stuck): each run's launcher
-        # participant is kept, not destroyed (a Fast DDS destroy can deadlock for good)
-        from fourws_ros import launcher_node
-        launcher_node.KEEP_PARTICIPANTS = True
+        if own_process:
+            # the process leaves right after its command (_leave_if_stuck): each run's
+            # launcher participant is kept, not destroyed (a Fast DDS destroy can deadlock)
+            from fourws_ros import launcher_node
+            launcher_node.KEEP_PARTICIPANTS = True
     # the batch kernel of a study (not its rerun through the node graph, whose nodes inherit
     # the environment) with 512-bit vectors; before anything is compiled (fourws_sim.lanes)
     if (argv[:1] == ["study"] and argv[1:2] != ["rerun"]) or (
@@ -120,7 +124,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 1
     try:
-        return _leave_if_stuck(int(args._run(args) or 0))
+        code = int(args._run(args) or 0)
+        return _leave_if_stuck(code) if own_process else code
     except FourwsError as exc:
         print(f"fourws {args.command}: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_USER_ERROR
@@ -163,5 +168,10 @@ def _os_error(exc: OSError, args: argparse.Namespace) -> str:
     return f"{what} (writing {', '.join(given)})" if given else what
 
 
+def entry() -> int:
+    """The ``fourws`` program (console script and ``python -m fourws_cli.main``)."""
+    return main(own_process=True)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(entry())

@@ -38,6 +38,10 @@ def test_free_steering_series_runs_through_the_graph_as_its_twin(tmp_path: Path,
     rc = main(["run", str(path), "--name", "p"])
     out = capsys.readouterr().out
     assert rc == 0, out
+    # called in this process, not as its own program: the launcher participants were closed,
+    # not kept (a kept one makes the caller's process leave with os._exit at its next command)
+    from fourws_ros import launcher_node
+    assert launcher_node.KEEP_PARTICIPANTS is False
     sc = load_scenario(path)
     members = scenario_runs(sc, "sol1")
     twins = run_series(sc, "sol1", members)
