@@ -43,6 +43,8 @@ _KEPT_LEVELS = (Log.WARN, Log.ERROR, Log.FATAL)
 #: ever (seen as a run whose recorder was killed ended). The run's outcome is known by
 #: then; the teardown is left to its thread.
 CLOSE_TIMEOUT_S = 10.0
+#: How long the simulator may take to answer the start request (or report running), s.
+START_TIMEOUT_S = 10.0
 #: The closing thread can hold the interpreter while it is stuck (rclpy's destroy calls keep
 #: it): then no Python code runs again, the timeout above included, and the process hung for
 #: good after a complete run (seen: a ``fourws run`` whose nodes had all exited). This much
@@ -231,10 +233,19 @@ class LauncherNode:
         return any(i.node_name == node_name for i in infos)
 
     def start_simulation(self) -> bool:
-        """Un-pause the simulator; False if it did not answer."""
+        """Un-pause the simulator; False if within :data:`START_TIMEOUT_S` it neither
+        answered nor reported that it runs. Its answer can be lost while the request was
+        taken (the simulator answered before it had matched this client's reply reader:
+        rmw's "failed to send response (timeout)", seen with a foreign node flooding the
+        domain); a status of the run's simulator saying it runs then is the answer."""
         future = self.pause.call_async(SetBool.Request(data=False))
-        self.executor.spin_until_future_complete(future, timeout_sec=10.0)
-        return future.done()
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
+            sim = self.state.sim
+            if future.done() or (sim is not None and (sim.running or sim.final)):
+                return True
+        return False
 
     def close(self, keep: Any = None) -> str:
         """Destroy the node and its context (:data:`CLOSED`); with :data:`KEEP_PARTICIPANTS`
@@ -270,4 +281,4 @@ class LauncherNode:
 
 
 __all__ = ["ABANDONED", "CLOSED", "CLOSE_BACKSTOP", "CLOSE_BACKSTOP_S", "CLOSE_TIMEOUT_S",
-           "KEEP_PARTICIPANTS", "KEPT", "LauncherNode", "RunState", "STUCK"]
+           "KEEP_PARTICIPANTS", "KEPT", "LauncherNode", "RunState", "START_TIMEOUT_S", "STUCK"]

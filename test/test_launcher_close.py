@@ -104,3 +104,38 @@ def test_fourws_leaves_with_its_exit_code_while_holding_a_stuck_participant():
     res = _python(code)
     assert res.returncode == 3, res.stderr
     assert res.stdout == "summary line"
+
+
+def _starting_launcher(status_after: int | None, final: bool = False) -> types.SimpleNamespace:
+    """A launcher whose start request is never answered (the reply lost); its simulator's
+    status says it runs after ``status_after`` spins (None: never)."""
+    state = launcher_node.RunState()
+    spins = []
+
+    def spin_once(timeout_sec):
+        spins.append(timeout_sec)
+        if status_after is not None and len(spins) >= status_after:
+            state.sim = types.SimpleNamespace(running=not final, final=final)
+
+    never = types.SimpleNamespace(done=lambda: False)
+    return types.SimpleNamespace(
+        state=state, spins=spins, executor=types.SimpleNamespace(spin_once=spin_once),
+        pause=types.SimpleNamespace(call_async=lambda request: never))
+
+
+def test_a_lost_start_answer_counts_once_the_simulator_says_it_runs(monkeypatch):
+    """The simulator took the start request but its reply never came (seen: rmw's 'failed to
+    send response (timeout)' with a rogue flooding the domain, and the run failed as 'the
+    simulator did not answer the start request' while it ran): its own running (or final)
+    status is the answer; with neither, the start fails after START_TIMEOUT_S."""
+    monkeypatch.setattr(launcher_node, "START_TIMEOUT_S", 0.5)
+    for final in (False, True):
+        fake = _starting_launcher(status_after=3, final=final)
+        assert launcher_node.LauncherNode.start_simulation(fake) is True
+        assert len(fake.spins) == 3
+    silent = _starting_launcher(status_after=None)
+    assert launcher_node.LauncherNode.start_simulation(silent) is False
+    paused = _starting_launcher(status_after=1)
+    paused.executor.spin_once = lambda timeout_sec: setattr(
+        paused.state, "sim", types.SimpleNamespace(running=False, final=False))
+    assert launcher_node.LauncherNode.start_simulation(paused) is False  # paused: no start
