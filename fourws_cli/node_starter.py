@@ -59,10 +59,8 @@ RUN_VARIABLES = frozenset({
     "FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE", "FOURWS_PHASE_FD",
     "PATH", "PWD", "OLDPWD", "_",
 })
-#: Environment switch: ``1`` forks the nodes through a starter; anything else (the default)
-#: starts every node as its own program. Off by default: one run of the whole suite in a
-#: clean clone failed with it (an Ackermann-driven lockstep run whose recorder never got the
-#: driver's final report, 90 s), not understood yet; every other graph test passed with it.
+#: Environment switch: ``0`` starts every node as its own program; unset or anything else
+#: (the default) forks the nodes through a starter.
 ENABLE_ENV = "FOURWS_NODE_STARTER"
 #: Time the starter gets to import everything and answer its first request, s.
 READY_TIMEOUT_S = 60.0

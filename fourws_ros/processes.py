@@ -28,8 +28,9 @@ from fourws_ros.runtime import (EXIT_INCOMPLETE, EXIT_PEERS, EXIT_RUN_STOPPED, E
 
 #: How many lines of a failed node's log the launcher repeats.
 LOG_TAIL_LINES = 15
-#: How long a stuck node gets to write its stacks before it is killed, s; frames repeated.
-STACK_WAIT_S = 0.5
+#: How long a stuck node gets at most to write its stacks before it is killed, s; frames
+#: repeated.
+STACK_WAIT_S = 2.0
 STACK_LINES = 8
 
 
@@ -362,15 +363,24 @@ class ProcessGroup:
             os.kill(child.proc.pid, STACK_SIGNAL)
         except OSError:
             return
-        time.sleep(STACK_WAIT_S)
-        try:
-            with child.log_path.open("rb") as f:
-                f.seek(start)
-                dump = f.read(64 * 1024).decode("utf-8", "replace").splitlines()
-        except OSError:
-            return
-        # faulthandler: "Current thread 0x... (most recent call first):" then its frames
-        current = [i for i, line in enumerate(dump) if line.startswith("Current thread")]
+        # faulthandler: "Current thread 0x... (most recent call first):" then its frames;
+        # read until the dump has its main thread and stopped growing (or STACK_WAIT_S)
+        deadline = time.monotonic() + STACK_WAIT_S
+        dump: list[str] = []
+        current: list[int] = []
+        while time.monotonic() < deadline:
+            time.sleep(0.05)
+            try:
+                with child.log_path.open("rb") as f:
+                    f.seek(start)
+                    lines = f.read(64 * 1024).decode("utf-8", "replace").splitlines()
+            except OSError:
+                return
+            settled = current and lines == dump
+            dump = lines
+            current = [i for i, line in enumerate(dump) if line.startswith("Current thread")]
+            if settled:
+                break
         frames = dump[current[0]:current[0] + 1 + STACK_LINES] if current else []
         for line in frames:
             self.echo(f"    {line.strip()}")

@@ -15,6 +15,10 @@ from rclpy.node import Node
 from fourws_ros.runtime import run_node
 
 
+#: Written to the log just before the node blocks for ever in its spin.
+STUCK_LINE = "[fourws_stuck] blocking in C now"
+
+
 def deadlock_in_c(hold_interpreter: bool) -> None:
     """Lock a default pthread mutex twice: blocks for ever in C."""
     libc = ctypes.PyDLL(None) if hold_interpreter else ctypes.CDLL(None)
@@ -28,9 +32,13 @@ class StuckNode(Node):
         super().__init__("fourws_stuck")
         self.where = where
         if where == "spin":
-            self.create_timer(0.05, lambda: deadlock_in_c(hold_interpreter=False))
+            self.create_timer(0.05, self._stuck)
         else:
             self.finished = True  # straight to the teardown
+
+    def _stuck(self) -> None:
+        print(STUCK_LINE, file=sys.stderr, flush=True)  # the test waits for it in the log
+        deadlock_in_c(hold_interpreter=False)
 
     def destroy_node(self) -> None:
         if self.where == "teardown":

@@ -21,6 +21,7 @@ from fourws_ros import graph_run, runtime
 from fourws_ros.processes import ProcessGroup
 from fourws_run.config import RunConfig
 from fourws_run.scenario import load_scenario
+from stuck_node import STUCK_LINE
 
 STUCK = Path(__file__).with_name("stuck_node.py")
 
@@ -30,11 +31,11 @@ def test_a_node_stuck_in_c_is_killed_with_its_stack_repeated(tmp_path, ros_domai
     group = ProcessGroup(tmp_path / "logs", dict(os.environ), lines.append, grace_s=1.0)
     child = group.start("fourws_stuck", [sys.executable, str(STUCK), "spin"])
     deadline = time.monotonic() + 120.0
-    while child.phase != "ready" and time.monotonic() < deadline:  # it reports its phases
-        child.read_phases()
+    while STUCK_LINE not in child.log_tail() and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert child.phase == "ready"
-    time.sleep(0.5)  # its timer fired: stuck
+    assert STUCK_LINE in child.log_tail()  # its timer fired: stuck from here on
+    child.read_phases()
+    assert child.phase == "ready"  # it reported its phases (a fourws node: it gets the dump)
     codes = group.stop(["fourws_stuck"])
     assert codes == {"fourws_stuck": -signal.SIGKILL}
     assert "  fourws_stuck ignored SIGINT, escalating" in lines
