@@ -34,8 +34,8 @@ from typing import Any, Callable
 from fourws_ros import node_params, topics
 from fourws_ros.domains import DomainError, domain_for_run, graph_env
 from fourws_ros.launcher_node import CLOSE_TIMEOUT_S, CLOSED, STUCK, LauncherNode, RunState
-from fourws_ros.processes import (ProcessGroup, describe_exit, node_command, ros_args,
-                                  set_fifo, user_command)
+from fourws_ros.processes import (ProcessGroup, describe_exit, last_line, node_command,
+                                  ros_args, set_fifo, user_command)
 from fourws_ros.runtime import TEARDOWN_BACKSTOP_S, TEARDOWN_TIMEOUT_S
 from fourws_ros.startup import wait_for_graph
 from fourws_run.bagfile import BagError, read_bag, verify_bag
@@ -416,10 +416,14 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
         if now - state.last_advance > STALL_TIMEOUT_S:
             waiting = state.sim.waiting_for if state.sim is not None else ""
             stopped = [c.name for c in group.children if c.stopped()]
+            # the simulator's own log says what it waits for, also where its status (or
+            # rosout) cannot reach this process
+            said = last_line(sim_proc.log_tail())
             return (f"simulation stalled at t = {state.sim_time_s:.2f} s (no progress for "
                     f"{STALL_TIMEOUT_S:.0f} s)"
                     + (f"; node {', '.join(stopped)} is stopped (SIGSTOP)" if stopped else "")
-                    + (f"; the simulator waits for: {waiting}" if waiting else ""))
+                    + (f"; the simulator waits for: {waiting}" if waiting else "")
+                    + (f"; its log's last line: {said}" if said else ""))
         if not config.lockstep and state.sim_time_s > duration + REALTIME_OVERRUN_S:
             return (f"the maneuver node did not end the run (t = {state.sim_time_s:.2f} s, "
                     f"maneuver duration {duration} s)")

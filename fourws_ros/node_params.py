@@ -155,12 +155,19 @@ def expected_endpoints(config: RunConfig, recorded: bool,
                  (topics.SIM_STATUS, "sub", launcher)]
     if config.driver_node and not replay:  # fourws's maneuver-role nodes read it
         expected.append((topics.SIM_STATUS, "sub", man))
+    # the launcher takes a status only from a publisher its graph names as the run's node
+    # (fourws_ros.launcher_node): its graph must name them before the first status, or it
+    # drops them (beside a CPU hog, a 1.4 s run's every maneuver status was dropped, the done
+    # included, and the run was failed for an end its bag holds)
+    expected.append((topics.SIM_STATUS, "pub", sim))
+    if config.driver_node and (config.lockstep or not replay):
+        expected.append((topics.MANEUVER_STATUS, "pub", man))
     if config.controller.builtin:
         expected.append((topics.SIM_STATUS, "sub", ctrl))
     if recorded:
         rec = NODE_NAMES[Role.RECORDER]
         expected += [(t, "sub", rec) for t in config.recorded_topics]
-        expected.append((topics.RECORDER_STATUS, "sub", sim))
+        expected += [(topics.RECORDER_STATUS, "sub", sim), (topics.RECORDER_STATUS, "pub", rec)]
     return expected
 
 

@@ -37,6 +37,8 @@ REPORT_EVERY_S = 5.0
 #: Default start-up timeout of a node waiting for its peers, s: a peer that compiles its
 #: numba kernels cold on a busy two-core machine takes up to about a minute, so twice that.
 STARTUP_TIMEOUT_S = 120.0
+#: A start-up wait longer than this is logged as a warning, s.
+WARN_AFTER_S = 10.0
 #: Key of a configuration-failure announcement on ``/fourws/node_config``.
 ERROR_KEY = "error"
 
@@ -145,20 +147,25 @@ class PeerWatch:
                 self._present = [self._names(n) for n in self.needs]
         return self._met
 
-    def check_startup(self) -> str:
-        """While not :meth:`ready`: log what is missing every :data:`REPORT_EVERY_S`;
-        the reason to give up ('' to go on waiting): a peer's announced failure, or the
+    def check_startup(self, also: Callable[[], list[str]] | None = None) -> str:
+        """While not :meth:`ready` (or ``also`` names more the node waits for): log what is
+        missing every :data:`REPORT_EVERY_S` (a warning once the wait is longer than
+        :data:`WARN_AFTER_S`: the launcher keeps a node's warnings as its last words); the
+        reason to give up ('' to go on waiting): a peer's announced failure, or the
         start-up timeout."""
         failed = self.failure()
         if failed:
             return failed
-        if self.ready():
+        more = also() if also is not None else []
+        if self.ready() and not more:
             return ""
         now = self._now()
-        missing = self.missing()
+        missing = (self.missing() if not self._met else []) + more
         if now - self._reported >= REPORT_EVERY_S and now - self._since >= 1.0:
             self._reported = now
-            self._node.get_logger().info("waiting for " + "; ".join(missing))
+            log = self._node.get_logger()
+            (log.warning if now - self._since >= WARN_AFTER_S else log.info)(
+                f"waiting {now - self._since:.0f} s for " + "; ".join(missing))
         if self._timeout > 0.0 and now - self._since > self._timeout:
             return (f"gave up after {self._timeout:g} s (startup_timeout_s) waiting for "
                     + "; ".join(missing))
@@ -189,4 +196,4 @@ class PeerWatch:
         return ""
 
 
-__all__ = ["ERROR_KEY", "Need", "PeerWatch", "REPORT_EVERY_S", "STARTUP_TIMEOUT_S"]
+__all__ = ["ERROR_KEY", "Need", "PeerWatch", "REPORT_EVERY_S", "STARTUP_TIMEOUT_S", "WARN_AFTER_S"]

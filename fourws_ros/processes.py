@@ -189,11 +189,11 @@ def describe_exit(child: Child, with_log: bool = True) -> str:
     else:
         what = f"exited with code {code}"
     text = f"node {child.name} {what} (log {child.log_path})"
-    cause = _last_line(child.log_tail()) if with_log else ""
+    cause = last_line(child.log_tail()) if with_log else ""
     return f"{text}: {cause}" if cause else text
 
 
-def _last_line(text: str) -> str:
+def last_line(text: str) -> str:
     """The last meaningful line of a node's log (a Python traceback's last line is its
     error), without terminal colour codes, at most 300 characters."""
     lines = [re.sub(r"\x1b\[[0-9;]*m", "", ln).strip() for ln in text.splitlines()]
@@ -402,5 +402,5 @@ class ProcessGroup:
                 child.proc.wait()
 
 
-__all__ = ["Child", "LOG_TAIL_LINES", "ProcessGroup", "describe_exit", "node_command",
+__all__ = ["Child", "LOG_TAIL_LINES", "ProcessGroup", "describe_exit", "last_line", "node_command",
            "ros_args", "set_fifo", "use_node_spawner", "user_command"]

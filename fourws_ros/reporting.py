@@ -170,6 +170,15 @@ class MatchWait:
         return [p.topic for p in self._counts.publishers
                 if p.get_subscription_count() < self._expected.get(p.topic, 0)]
 
+    def unmatched_text(self) -> list[str]:
+        """The unmatched publishers, each as "1 of 2 subscribers of /fourws/odom"."""
+        out = []
+        for p in self._counts.publishers:
+            have, want = p.get_subscription_count(), self._expected.get(p.topic, 0)
+            if have < want:
+                out.append(f"{have} of {want} subscribers of {p.topic}")
+        return out
+
 
 def match_wait(node: Any, counts: PublishCounts) -> MatchWait:
     """Declare :data:`EXPECTED_SUBSCRIBERS_PARAM` on ``node`` and give the :class:`MatchWait`

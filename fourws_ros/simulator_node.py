@@ -385,7 +385,7 @@ class SimulatorNode(Node):
         self._run_nodes.poll()
         clock = self.clock
         if not clock.started:
-            why = self.peers.check_startup()
+            why = self.peers.check_startup(self._start_waits)
             if why:
                 self.exit_code = EXIT_PEERS
                 self.end(why, True)
@@ -407,6 +407,14 @@ class SimulatorNode(Node):
 
     def _graph_ready(self) -> bool:
         return self.peers.ready() and self._recorder_seen and self.matched.ready()
+
+    def _start_waits(self) -> list[str]:
+        """What the start waits for besides the peers: the recorder's first status (its
+        stored counts pace a lockstep run) and the run's subscribers of each publication."""
+        out = [] if self._recorder_seen else [f"a first {topics.RECORDER_STATUS}"]
+        if not self.matched.ready():
+            out += self.matched.unmatched_text()
+        return out
 
     def _try_final(self) -> None:
         """Send the final status once the recorder holds everything the run sent (so a node

@@ -258,3 +258,25 @@ def test_a_bag_incomplete_beside_a_silent_realtime_controller_names_the_controll
     conclude(rec, _config("realtime"), _sim(stale_commands=5), done, False, "",
              BagCheck(problems=[gap]))
     assert rec.reason == "recording incomplete: " + gap
+
+
+def test_a_run_stopped_for_a_missing_answer_names_the_second_publisher_of_states(tmp_path):
+    """The maneuver answered a foreign copy of a state and refused the run's own as not after
+    the previous one; the simulator stopped the run for the driver input that never came (the
+    launcher's failure). The reason names the copies first, then the stop (seen beside a CPU
+    hog: the simulator's stop alone, which blamed the maneuver node)."""
+    from fourws_run.ticks import NOT_AFTER_PREVIOUS
+
+    stopped = ("node fourws_simulator stopped the run: no driver input for the state at "
+               "t = 9.09 s within 60 s (wall time)")
+    refused = {f"/fourws/state: {NOT_AFTER_PREVIOUS}": 1}
+    man = ManeuverReport("", "", False, rejections=refused)
+    rec = _record(tmp_path)
+    conclude(rec, _config(), _sim(), man, False, stopped, None)
+    assert rec.outcome == Outcome.FAILED
+    assert rec.reason == ("a second publisher sent states on this run's clock (1x "
+                          f"fourws_maneuver: /fourws/state: {NOT_AFTER_PREVIOUS}): the answers "
+                          "applied may be to its states; then: " + stopped)
+    rec = _record(tmp_path)  # without refused states the stop stands alone
+    conclude(rec, _config(), _sim(), ManeuverReport("", "", False), False, stopped, None)
+    assert rec.outcome == Outcome.FAILED and rec.reason == stopped
