@@ -73,13 +73,27 @@ def _try_lock(domain: int) -> TextIO | None:
     return handle
 
 
+def _last_leased(domain: int) -> float:
+    """When ``domain`` was last leased on this machine (its lock file's mtime; 0: never)."""
+    try:
+        return (_LOCK_DIR / f"{domain}.lock").stat().st_mtime
+    except OSError:
+        return 0.0
+
+
 def reserve_domain_id(start: int | None = None) -> DomainLease:
     """Lock a ROS domain ID no other fourws run or test on this machine holds.
+
+    By default the free ID leased longest ago: two runs one after the other (a series, the
+    runs of one process) never share a domain, so nothing a run left behind on its domain
+    -- a node still in its teardown, a participant the run could not close, a shared-memory
+    port of a killed node that Fast DDS reopens for a later participant -- meets the next
+    run; a domain comes back only after every other one was used.
 
     Parameters
     ----------
     start : int, optional
-        First ID to try (default: spread by process id so parallel callers rarely collide).
+        First ID to try instead (then upwards, wrapping around).
 
     Raises
     ------
@@ -87,11 +101,18 @@ def reserve_domain_id(start: int | None = None) -> DomainLease:
         If every ID of :data:`DOMAIN_ID_RANGE` is taken.
     """
     ids = list(DOMAIN_ID_RANGE)
-    first = (os.getpid() if start is None else start) % len(ids)
-    for k in range(len(ids)):
-        domain = ids[(first + k) % len(ids)]
+    if start is None:
+        order = sorted(ids, key=_last_leased)
+    else:
+        first = start % len(ids)
+        order = ids[first:] + ids[:first]
+    for domain in order:
         handle = _try_lock(domain)
         if handle is not None:
+            try:
+                os.utime(handle.fileno())
+            except OSError:
+                pass  # the order is a preference, the lock is the guarantee
             return DomainLease(domain, handle)
     raise DomainError(f"no free ROS domain ID in {DOMAIN_ID_RANGE.start}.."
                       f"{DOMAIN_ID_RANGE.stop - 1} (every one is used by a fourws run)")

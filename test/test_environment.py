@@ -16,7 +16,7 @@ from pathlib import Path
 
 from conftest import USER_ROS_ENVIRONMENT
 
-from fourws_ros.domains import DOMAIN_ID_RANGE
+from fourws_ros.domains import DOMAIN_ID_RANGE, reserve_domain_id
 
 ROOT = Path(__file__).resolve().parent.parent
 #: What a ROS user's shell often holds (the issue's case: ROS_DOMAIN_ID=91 exported).
@@ -37,6 +37,18 @@ def test_a_reserved_domain_is_the_tests_own(ros_domain):
     """``ros_domain`` exports a leased domain (fourws's range), never a user's."""
     assert os.environ["ROS_DOMAIN_ID"] == str(ros_domain)
     assert ros_domain in DOMAIN_ID_RANGE
+
+
+def test_runs_one_after_the_other_never_share_a_domain():
+    """A domain released is the last one leased again: each of 90 leases taken and released in
+    turn gets a domain none of the others got (what a run left behind on its domain never
+    meets the next run of this process); 10 of the 100 may be held meanwhile by runs beside."""
+    seen = []
+    for _ in range(len(DOMAIN_ID_RANGE) - 10):
+        lease = reserve_domain_id()
+        seen.append(lease.domain_id)
+        lease.release()
+    assert len(set(seen)) == len(seen) and set(seen) <= set(DOMAIN_ID_RANGE)
 
 
 def test_a_shells_ros_settings_are_removed_for_the_session(tmp_path):
