@@ -453,24 +453,32 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
 
 
 def _wait_recorder(group: ProcessGroup, rec: str, state: RunState,
-                   poll: Callable[[float], None], echo: Callable[[str], None]) -> list[str]:
+                   poll: Callable[[float], None], echo: Callable[[str], None],
+                   bag_path: Path | None = None) -> list[str]:
     """Wait up to :data:`RECORDER_GRACE_S` for the recorder to close the bag and exit; a
-    recorder that said it closed the bag but has not exited :data:`RECORDER_TEARDOWN_S` later
-    is stuck in its ROS teardown: stopped, not a failure (the verdict reads the bag from
-    disk). Returns ``[rec]`` if it neither exited nor closed the bag in time."""
+    recorder that closed the bag (its status said so, or the bag's ``metadata.yaml``, written
+    at the close, is on disk) but has not exited :data:`RECORDER_TEARDOWN_S` later is stuck
+    in its ROS teardown, and one that is stopped cannot exit: either is stopped, not a failure
+    (the verdict reads the bag from disk). Returns ``[rec]`` if it neither exited nor closed
+    the bag in time, or was stopped before it closed it."""
     deadline = time.monotonic() + RECORDER_GRACE_S
     closed_at = None
     recorder = group.child(rec)
     while recorder.alive():
         now = time.monotonic()
-        if closed_at is None and state.recorder is not None and state.recorder.closed:
+        if closed_at is None and ((state.recorder is not None and state.recorder.closed)
+                                  or (bag_path is not None
+                                      and (bag_path / "metadata.yaml").is_file())):
             closed_at = now
-        if closed_at is not None and now - closed_at > RECORDER_TEARDOWN_S:
-            echo(f"  {rec} closed the bag but did not exit within {RECORDER_TEARDOWN_S:.0f} s "
-                 "(stuck in its ROS teardown, or stopped); stopping it")
+        stopped = recorder.stopped()
+        if closed_at is not None and (stopped or now - closed_at > RECORDER_TEARDOWN_S):
+            echo(f"  {rec} closed the bag but "
+                 + ("is stopped (SIGSTOP)" if stopped else
+                    f"did not exit within {RECORDER_TEARDOWN_S:.0f} s (stuck in its ROS "
+                    "teardown)") + "; stopping it")
             group.stop([rec], grace_s=1.0)
             return []
-        if now > deadline or (closed_at is None and recorder.stopped()):
+        if now > deadline or (closed_at is None and stopped):
             return [rec]  # (a stopped process cannot close the bag by itself)
         poll(0.05)
     return []
@@ -507,12 +515,15 @@ def _finish(config: RunConfig, group: ProcessGroup, ros: LauncherNode | None,
             # closes the bag with what it has
             if bag_path is not None and group.has(rec) and (
                     state.maneuver_end is not None or not config.driver_node):
-                left = _wait_recorder(group, rec, state, poll, echo)
+                left = _wait_recorder(group, rec, state, poll, echo, bag_path)
                 if left:
                     detail = (state.recorder.detail if state.recorder is not None
                               else "no recorder status")
                     failure = (f"{RECORDER_LATE} {RECORDER_GRACE_S:.0f} s after the "
-                               f"simulation ended ({detail})")
+                               f"simulation ended ({detail})"
+                               if not group.child(rec).stopped() else
+                               f"the recorder was stopped (SIGSTOP) before it closed the bag "
+                               f"({detail})")
             # the controller is stopped once the recorder has its messages (a user's own may
             # never exit by itself)
             if config.controller.builtin:
