@@ -449,6 +449,12 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
         # a node was killed: the simulator may have ended the run first (a peer left), but
         # the kill is the cause
         return describe_exit(dead)
+    stopped = [c.name for c in group.children if c.stopped()]
+    stop = state.sim_final.stop_reason if state.sim_final is not None else ""
+    if stopped and stop:
+        # a stopped node is the cause of a missing answer, also of another node's (a
+        # publisher blocked on the stopped reader's shared-memory port)
+        return f"node {', '.join(stopped)} is stopped (SIGSTOP); then: {stop}"
     return ""
 
 

@@ -78,6 +78,16 @@ class TickSink(Protocol):
         for a reader ("the controller node (fourws_controller)")."""
 
 
+def _silent_nodes(sink: TickSink, missing: str) -> str:
+    """The nodes whose answers ``missing`` names ("driver input and rear-steer command": both,
+    "the maneuver node (...) and the controller node (...)"): a node that stopped can hold up
+    another's answer (a publisher blocked on a stopped reader's shared-memory port), so the
+    verdict names every answer that did not come, not only the first."""
+    nodes = [sink.silent_node(kind) for kind in (DRIVER_INPUT, REAR_STEER_COMMAND)
+             if kind in missing]
+    return " and ".join(nodes) if nodes else sink.silent_node(REAR_STEER_COMMAND)
+
+
 class Clock:
     """What both modes share: the engine, the input limits, the counters of the statuses."""
 
@@ -277,8 +287,7 @@ class LockstepClock(Clock):
         awaited = self.answers.awaited
         if awaited is not None and self._now() - self._await_since > self._timeout():
             missing = self.answers.waiting_for
-            silent = self.sink.silent_node(DRIVER_INPUT if DRIVER_INPUT in missing
-                                           else REAR_STEER_COMMAND)
+            silent = _silent_nodes(self.sink, missing)
             self.sink.end(f"no {missing} for the state at t = {awaited.t:.2f} s within "
                           f"{self._timeout():g} s (wall time); {silent} did not answer", True)
 
@@ -427,8 +436,7 @@ class RealtimeClock(Clock):
             return
         if time.monotonic() - self._first_since > self._answer_timeout():
             missing = self.waiting_for()
-            node = self.sink.silent_node(DRIVER_INPUT if DRIVER_INPUT in missing
-                                         else REAR_STEER_COMMAND)
+            node = _silent_nodes(self.sink, missing)
             self.sink.end(f"no {missing.split(' (')[0]} for the first state within "
                           f"{self._answer_timeout():g} s (wall time); {node} did not answer",
                           True)
