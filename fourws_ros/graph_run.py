@@ -452,8 +452,8 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
     stopped = [c.name for c in group.children if c.stopped()]
     stop = state.sim_final.stop_reason if state.sim_final is not None else ""
     if stopped and stop:
-        # a stopped node is the cause of a missing answer, also of another node's (a
-        # publisher blocked on the stopped reader's shared-memory port)
+        # a stopped node is the cause of a missing answer, and can hold up another node's
+        # (fourws_run.clock_modes._silent_nodes)
         return f"node {', '.join(stopped)} is stopped (SIGSTOP); then: {stop}"
     return ""
 

@@ -81,8 +81,9 @@ class TickSink(Protocol):
 def _silent_nodes(sink: TickSink, missing: str) -> str:
     """The nodes whose answers ``missing`` names ("driver input and rear-steer command": both,
     "the maneuver node (...) and the controller node (...)"): a node that stopped can hold up
-    another's answer (a publisher blocked on a stopped reader's shared-memory port), so the
-    verdict names every answer that did not come, not only the first."""
+    another's answer (seen: a maneuver's driver input 2.6 s late while the controller was
+    stopped, most likely its publish waiting on the stopped reader's shared-memory port), so
+    the verdict names every answer that did not come, not only the first."""
     nodes = [sink.silent_node(kind) for kind in (DRIVER_INPUT, REAR_STEER_COMMAND)
              if kind in missing]
     return " and ".join(nodes) if nodes else sink.silent_node(REAR_STEER_COMMAND)
