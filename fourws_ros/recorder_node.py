@@ -19,7 +19,8 @@ Accounting and completeness
 sequence numbers never arrived; the simulator's and the maneuver's status messages bring their
 own published counts, the final ones when the run ends. The recorder publishes its progress
 and accounting on ``/fourws/recorder_status`` (the simulator's lockstep flow control reads the
-stored counts). Once the simulator's final status is in and every expected message is stored
+stored counts) when it stored something, and at least every ``STATUS_HEARTBEAT_S`` until the
+bag is closed. Once the simulator's final status is in and every expected message is stored
 (``complete``), it writes the accounting into the bag (``metadata.yaml`` ``custom_data``
 ``fourws.complete`` / ``fourws.accounting`` and an MCAP metadata record), closes the bag and
 exits (``close_when_complete``). On SIGINT/SIGTERM before that it drains what DDS still holds
@@ -68,6 +69,11 @@ from fourws_sim.errors import ParameterError
 STATUS_EVERY = 20
 #: Wall period of the recorder status and the pending-publisher lookups, s.
 STATUS_PERIOD_S = 0.1
+#: Until the bag is closed a status goes out at least this often (wall), even with nothing new
+#: stored: the status topic is volatile, and a reader that matched after the last status
+#: (the simulator, whose start waits for a first one) would otherwise wait for the next
+#: message stored, which before the start never comes (a run stalled at t = 0), s.
+STATUS_HEARTBEAT_S = 0.5
 # A publisher the ROS graph cannot name within UNIDENTIFIED_AFTER_S (wall time) is foreign;
 # MAX_HELD messages are kept per publisher meanwhile (fourws_ros.identity: one rule for the
 # nodes that take messages by publisher).
@@ -174,6 +180,7 @@ class RecorderNode(Node):
         self._names = PublisherNames(self)
         self._pending: dict[bytes, tuple[float, list[tuple[str, bytes, int]]]] = {}
         self._status_due = False
+        self._status_at = 0.0
         self._unreported = 0
         self._status_pub = self.create_publisher(
             topics.message_class(topics.RECORDER_STATUS), topics.RECORDER_STATUS,
@@ -304,7 +311,8 @@ class RecorderNode(Node):
         self._names.refresh(*self._subs)
         if self._pending:
             self._resolve_pending()
-        if self._status_due and not self.closed:
+        if not self.closed and (self._status_due or time.monotonic() - self._status_at
+                                >= STATUS_HEARTBEAT_S):
             self._publish_status()
         if not self.closed and time.monotonic() - self._flushed_wall >= self._flush_wall_s:
             self._flush()
@@ -339,6 +347,7 @@ class RecorderNode(Node):
 
     def _publish_status(self) -> None:
         self._status_due = False
+        self._status_at = time.monotonic()
         self._unreported = 0
         account = self.ledger.account()
         msg = self._status_msg

@@ -195,7 +195,8 @@ class RecorderWatch:
     """What the recorder reports stored (``/fourws/recorder_status``), for a node that must
     know its messages are in the bag before it exits."""
 
-    #: A recorder that has sent no status for this long (wall time; it reports every 0.1 s)
+    #: A recorder that has sent no status for this long (wall time; it reports at least
+    #: every recorder_node.STATUS_HEARTBEAT_S, 0.5 s)
     #: is gone -- killed, or stopped -- and there is no point waiting for it, s.
     SILENT_S = 2.0
 

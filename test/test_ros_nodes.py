@@ -127,6 +127,37 @@ def test_recorder_closes_a_bag_that_cannot_complete_after_the_final_counts(
     assert len(run.topics[topics.STATE]) == 2000
 
 
+def test_a_status_reader_matched_late_still_hears_the_recorder(tmp_path, rclpy_context):
+    """A reader of /fourws/recorder_status created after the recorder's first status (the
+    topic is volatile), with nothing for the recorder to store: it still gets statuses, at
+    least every STATUS_HEARTBEAT_S. Before, the recorder spoke only after storing something,
+    and a simulator whose start waits for a first status waited for good (a run stalled at
+    t = 0 in CI)."""
+    import rclpy
+    from fourws_ros.recorder_node import STATUS_HEARTBEAT_S
+
+    proc = _start_recorder(tmp_path / "bag", *_AS_SIMULATOR)
+    node = rclpy.create_node("late_reader", context=rclpy_context)
+    executor = rclpy.executors.SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    try:
+        # the recorder is up (its status publisher is in the graph, its first status sent)
+        assert _spin_until(executor, lambda: any(
+            i.node_name == "fourws_recorder"
+            for i in node.get_publishers_info_by_topic(topics.RECORDER_STATUS)), 60.0)
+        heard = []
+        node.create_subscription(topics.message_class(topics.RECORDER_STATUS),
+                                 topics.RECORDER_STATUS, heard.append, topics.STATUS_QOS)
+        assert _spin_until(executor, lambda: len(heard) >= 3, 40 * STATUS_HEARTBEAT_S), (
+            f"{len(heard)} statuses")
+        assert not heard[-1].closed and list(heard[-1].stored) == [0, 0]  # nothing stored
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
 def test_recorder_closes_complete_bag_when_the_run_ends(tmp_path, rclpy_context):
     """States, then the simulator's final status with its counts: the recorder holds all 2001
     messages, closes the bag by itself as complete and exits 0 (no signal needed)."""
