@@ -163,9 +163,12 @@ class PeerWatch:
         missing = (self.missing() if not self._met else []) + more
         if now - self._reported >= REPORT_EVERY_S and now - self._since >= 1.0:
             self._reported = now
-            log = self._node.get_logger()
-            (log.warning if now - self._since >= WARN_AFTER_S else log.info)(
-                f"waiting {now - self._since:.0f} s for " + "; ".join(missing))
+            text = f"waiting {now - self._since:.0f} s for " + "; ".join(missing)
+            # one call site per severity: rclpy refuses a call site that changes severity
+            if now - self._since >= WARN_AFTER_S:
+                self._node.get_logger().warning(text)
+            else:
+                self._node.get_logger().info(text)
         if self._timeout > 0.0 and now - self._since > self._timeout:
             return (f"gave up after {self._timeout:g} s (startup_timeout_s) waiting for "
                     + "; ".join(missing))

@@ -88,3 +88,20 @@ def test_missing_matches_and_other_waits_are_named_together() -> None:
                                "(there: none); 2 of 4 subscribers of /fourws/sim_status")]
     now[0] = 1e6  # no timeout (0): a node that is part of a bigger system waits
     assert watch.check_startup(lambda: []) == ""
+
+
+def test_the_wait_switches_to_warnings_through_rclpys_own_logger() -> None:
+    """The same wait logged by a real rclpy logger across the switch from info to warning:
+    rclpy refuses a call site whose severity changes (ValueError 'Logger severity cannot be
+    changed between calls', which ended every node of a hand-started graph waiting past
+    WARN_AFTER_S)."""
+    import rclpy.logging
+
+    now = [0.0]
+    node = _Node()
+    logger = rclpy.logging.get_logger("fourws_test_peers")  # one object, as a node's
+    node.get_logger = lambda: logger
+    watch = peers.PeerWatch(node, 0.0, monotonic=lambda: now[0])
+    for t in (peers.REPORT_EVERY_S, peers.WARN_AFTER_S + 1.0, peers.WARN_AFTER_S + 7.0):
+        now[0] = t
+        assert watch.check_startup(lambda: ["a first /fourws/recorder_status"]) == ""
