@@ -142,8 +142,13 @@ class ManeuverNode(Node):
     def _finish(self, stamp_ns: int, t: float, end: str, event: str) -> None:
         self.done = True
         self._status(stamp_ns, "done", self.maneuver.progress(t), event, end)
-        log = self.get_logger().info if end != "aborted" else self.get_logger().warning
-        log(f"maneuver {end} at t = {t:.3f} s: {event}")
+        text = f"maneuver {end} at t = {t:.3f} s: {event}"
+        # one call site per severity (rclpy refuses one whose severity changes: a run reset
+        # after a completed maneuver could end aborted)
+        if end == "aborted":
+            self.get_logger().warning(text)
+        else:
+            self.get_logger().info(text)
         if bool(self.get_parameter("exit_when_done").value):
             self.finished = True
 
