@@ -415,7 +415,7 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
         now = time.monotonic()
         if now - state.last_advance > STALL_TIMEOUT_S:
             waiting = state.sim.waiting_for if state.sim is not None else ""
-            stopped = [c.name for c in group.children if c.stopped()]
+            stopped = group.stopped()
             # the simulator's own log says what it waits for, also where its status (or
             # rosout) cannot reach this process
             said = last_line(sim_proc.log_tail())
@@ -449,7 +449,7 @@ def _drive(config: RunConfig, group: ProcessGroup, ros: LauncherNode, state: Run
         # a node was killed: the simulator may have ended the run first (a peer left), but
         # the kill is the cause
         return describe_exit(dead)
-    stopped = [c.name for c in group.children if c.stopped()]
+    stopped = group.stopped()
     stop = state.sim_final.stop_reason if state.sim_final is not None else ""
     if stopped and stop:
         # a stopped node is the cause of a missing answer, and can hold up another node's

@@ -296,6 +296,10 @@ class ProcessGroup:
         """Whether a child called ``name`` was started."""
         return any(c.name == name for c in self.children)
 
+    def stopped(self) -> list[str]:
+        """The names of the children stopped now (SIGSTOP/SIGTSTP)."""
+        return [c.name for c in self.children if c.stopped()]
+
     def failed(self) -> Child | None:
         """A child that exited with a non-zero code, if any (exiting with 0 is how nodes end
         at the end of a run)."""

@@ -165,19 +165,19 @@ class MatchWait:
             self._ready = not self.unmatched()
         return self._ready
 
+    def _short(self) -> list[tuple[str, int, int]]:
+        """``(topic, matched, expected)`` of each publisher short of its subscribers."""
+        counted = ((p.topic, p.get_subscription_count(), self._expected.get(p.topic, 0))
+                   for p in self._counts.publishers)
+        return [(topic, have, want) for topic, have, want in counted if have < want]
+
     def unmatched(self) -> list[str]:
         """Topics whose publisher has fewer matched subscribers than expected."""
-        return [p.topic for p in self._counts.publishers
-                if p.get_subscription_count() < self._expected.get(p.topic, 0)]
+        return [topic for topic, _, _ in self._short()]
 
     def unmatched_text(self) -> list[str]:
         """The unmatched publishers, each as "1 of 2 subscribers of /fourws/odom"."""
-        out = []
-        for p in self._counts.publishers:
-            have, want = p.get_subscription_count(), self._expected.get(p.topic, 0)
-            if have < want:
-                out.append(f"{have} of {want} subscribers of {p.topic}")
-        return out
+        return [f"{have} of {want} subscribers of {topic}" for topic, have, want in self._short()]
 
 
 def match_wait(node: Any, counts: PublishCounts) -> MatchWait:

@@ -129,16 +129,20 @@ def _flooders(account: RunAccount | None) -> str:
 RECORDER_LATE = "the recorder did not hold every message"
 
 
+def _second_publisher(what: str, counts: dict[str, int], so: str) -> str:
+    """'a second publisher <what> (12x <rejection>; ...): <so>'."""
+    return (f"a second publisher {what} ("
+            + "; ".join(f"{n}x {k}" for k, n in counts.items()) + f"): {so}")
+
+
 def _doubled(doubled: dict[str, int]) -> str:
-    return ("a second publisher sent states on this run's clock ("
-            + "; ".join(f"{n}x {k}" for k, n in doubled.items())
-            + "): the answers applied may be to its states")
+    return _second_publisher("sent states on this run's clock", doubled,
+                             "the answers applied may be to its states")
 
 
 def _second_answers(ambiguous: dict[str, int]) -> str:
-    return ("a second publisher answered states of this run ("
-            + "; ".join(f"{n}x {k}" for k, n in ambiguous.items())
-            + "): the inputs applied are not certain")
+    return _second_publisher("answered states of this run", ambiguous,
+                             "the inputs applied are not certain")
 
 
 def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
