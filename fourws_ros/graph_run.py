@@ -229,8 +229,9 @@ def run_graph(config: RunConfig, out_dir: Path, *, run_name: str | None = None,
         _label_user_law(record, config)
         _write_record(record, echo)
         # the verdict is on disk before the launcher's participant is closed (a close that
-        # never ends cannot take it along)
-        closed = ros.close(keep=lease) if ros is not None else CLOSED
+        # never ends cannot take it along); the user's own domain is given back for the
+        # command's next run (a demo's three), so its participant is destroyed, not kept
+        closed = ros.close(keep=lease, destroy=lease.from_user) if ros is not None else CLOSED
         if closed == STUCK:  # the lease is kept with the stuck participant
             echo(f"  note: the launcher's ROS participant did not close within "
                  f"{CLOSE_TIMEOUT_S:.0f} s (a Fast DDS deadlock); domain {lease.domain_id} "

@@ -247,14 +247,15 @@ class LauncherNode:
                 return True
         return False
 
-    def close(self, keep: Any = None) -> str:
+    def close(self, keep: Any = None, destroy: bool = False) -> str:
         """Destroy the node and its context (:data:`CLOSED`); with :data:`KEEP_PARTICIPANTS`
-        keep it instead (:data:`KEPT`); :data:`STUCK` if the destroy did not end within
-        :data:`CLOSE_TIMEOUT_S`. A kept or stuck participant is left as it is, in
-        :data:`ABANDONED` with ``keep`` (the run's domain lease: a next run in this process
-        must not meet it). A destroy stuck holding the interpreter ends the process
-        (:data:`CLOSE_BACKSTOP_S`)."""
-        if KEEP_PARTICIPANTS:
+        and not ``destroy`` keep it instead (:data:`KEPT`); :data:`STUCK` if the destroy did
+        not end within :data:`CLOSE_TIMEOUT_S`. A kept or stuck participant is left as it is,
+        in :data:`ABANDONED` with ``keep`` (the run's domain lease: a next run in this process
+        must not meet it). ``destroy`` is for a domain the next run must have again (the
+        user's ``ROS_DOMAIN_ID``: a kept lease would refuse the second run of a demo). A
+        destroy stuck holding the interpreter ends the process (:data:`CLOSE_BACKSTOP_S`)."""
+        if KEEP_PARTICIPANTS and not destroy:
             ABANDONED.append((self, keep))
             return KEPT
         done = threading.Event()

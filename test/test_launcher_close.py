@@ -64,6 +64,20 @@ def test_the_command_lines_participants_are_kept_not_destroyed(monkeypatch):
     assert fake.calls == [] and launcher_node.ABANDONED == [(fake, "the lease")]
 
 
+def test_a_participant_on_the_users_domain_is_destroyed_even_where_they_are_kept(monkeypatch):
+    """The user's ROS_DOMAIN_ID is the domain of every run of the command: its lease cannot be
+    kept with the participant (a demo's second run would be refused: 'domain N is used by
+    another fourws run')."""
+    monkeypatch.setattr(launcher_node, "ABANDONED", [])
+    monkeypatch.setattr(launcher_node, "KEEP_PARTICIPANTS", True)
+    release = threading.Event()
+    release.set()
+    fake = _stuck_launcher(release)
+    assert launcher_node.LauncherNode.close(fake, keep="the lease", destroy=True) \
+        == launcher_node.CLOSED
+    assert fake.calls == ["node", "context"] and launcher_node.ABANDONED == []
+
+
 def test_a_close_stuck_holding_the_interpreter_ends_the_process():
     """The destroy deadlocks in C holding the interpreter (no Python code runs again, the
     close's own timeout included): faulthandler's thread writes the stacks and exits, code 1,
