@@ -54,7 +54,9 @@ def _stopped_while_starting(_signum: int, _frame: object) -> None:
 
 
 def run_node(argv: list[str]) -> int:
-    """Run node ``argv[0]`` with the remaining arguments; returns its exit code."""
+    """Run node ``argv[0]`` with the remaining arguments, then end the process with its exit
+    code (see the module's text); returns only a usage error's code (and raises what the node
+    raised)."""
     if not argv or argv[0] in ("-h", "--help"):
         print("usage: fourws node NAME [--ros-args ...]\nnodes: " + ", ".join(NODES))
         return 0 if argv else 1
@@ -68,7 +70,19 @@ def run_node(argv: list[str]) -> int:
             signal.signal(sig, _stopped_while_starting)
     module_name, _, function = NODES[name].partition(":")
     module = importlib.import_module(module_name)
-    return int(getattr(module, function or "main")([f"fourws_{name}", *rest]) or 0)
+    code = int(getattr(module, function or "main")([f"fourws_{name}", *rest]) or 0)
+    _leave(code)
+    return code  # not reached
+
+
+def _leave(code: int) -> None:
+    """End this node's process with ``code`` now, Python's finalization skipped."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed or broken log: nothing more to say
+            pass
+    os._exit(code)
 
 
 def _console_script(name: str) -> int:

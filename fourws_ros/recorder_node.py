@@ -255,6 +255,11 @@ class RecorderNode(Node):
             self._fail(exc)
             return
         self._status_due = True
+        if topic in _REPORT_TOPICS and self.ledger.ended:
+            # a writer's final report is itself recorded: the bag is complete only once it is
+            # stored, here, not at its reading above (the next tick would close it, up to
+            # STATUS_PERIOD_S later, and every node waits for that close to leave)
+            self._check_complete()
 
     def _fail(self, exc: OSError) -> None:
         """The bag cannot be written (disk full, file system gone read-only): stop with the

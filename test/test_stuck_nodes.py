@@ -114,10 +114,10 @@ def test_the_record_is_on_disk_before_the_launchers_participant_closes(tmp_path,
     seen = []
     close = launcher_node.LauncherNode.close
 
-    def checked_close(self, keep=None):
+    def checked_close(self, keep=None, destroy=False):
         record = json.loads((tmp_path / "r" / "run.json").read_text())
         seen.append((record["outcome"], record["message_counts"]["/fourws/state"]))
-        return close(self, keep)
+        return close(self, keep, destroy)
 
     monkeypatch.setattr(launcher_node.LauncherNode, "close", checked_close)
     config = RunConfig.from_scenario(load_scenario("default"), "fws")
