@@ -64,61 +64,90 @@ class ProgressBar:
 
 def run(args: argparse.Namespace) -> int:
     """Analyse the bags; exit 0 if all were analysed, 2 if none could be, 1 if some failed."""
-    from fourws_analysis import bag as bagmod  # scipy, control: not for --help
-    from fourws_analysis.compare import analyze_run  # scipy, control: not for --help
-    from fourws_analysis.report import write_report  # scipy, control: not for --help
-
-    if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0.0):
-        raise ParameterError("--dt", f"must be a finite number of seconds > 0, got {args.dt!r}")
-    start = time.perf_counter()
-    steps_per_bag = 7
-    bar = ProgressBar(len(args.bags) * steps_per_bag + (6 if args.report else 0),
-                      enabled=not args.quiet and sys.stderr.isatty())
-    analyses = []
-    failures: dict[str, str] = {}
+    analysis = BagAnalysis(args)
     for path in args.bags:
-        bar(f"reading {path}")
+        analysis.add(path)
+    return analysis.finish()
+
+
+class BagAnalysis:
+    """The analysis of ``fourws analyze``, one bag at a time (:meth:`add`), then the report
+    and the printed results (:meth:`finish`): ``fourws demo`` analyses each bag while the
+    next run goes on."""
+
+    #: Progress-bar steps per bag.
+    STEPS_PER_BAG = 7
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0.0):
+            raise ParameterError("--dt", f"must be a finite number of seconds > 0, "
+                                 f"got {args.dt!r}")
+        self.args = args
+        self.bar = ProgressBar(len(args.bags) * self.STEPS_PER_BAG + (6 if args.report else 0),
+                               enabled=not args.quiet and sys.stderr.isatty())
+        self.analyses: list[Any] = []
+        self.failures: dict[str, str] = {}
+        self.busy_s = 0.0  # the time spent analysing (a demo's runs go on between bags)
+
+    def add(self, path: str) -> None:
+        """Read, resample and analyse one bag (a bag that cannot be read is a failure)."""
+        from fourws_analysis import bag as bagmod  # scipy, control: not for --help
+        from fourws_analysis.compare import analyze_run  # scipy, control: not for --help
+
+        start = time.perf_counter()
         try:
-            run_data = bagmod.load_bag(path, allow_incomplete=args.allow_incomplete)
-            uniform = bagmod.resample(run_data, args.dt)
-        except FourwsError as exc:
-            failures[path] = one_line(exc)
-            continue
-        base, k = uniform.name, 2
-        while uniform.name in {a.name for a in analyses}:  # labels key the metrics
-            uniform.name, k = f"{base}#{k}", k + 1
-        result = analyze_run(uniform, eig_sweep=not args.no_sweep, progress=bar)
-        result.notes.extend(run_data.warnings)
-        result.recording = ("complete" if run_data.complete else "unverified"
-                            if run_data.complete is None else
-                            "INCOMPLETE: " + "; ".join(run_data.problems))
-        analyses.append(result)
-    index = None
-    if args.report:
-        index = write_report(analyses, args.report, failures, progress=bar)
-    bar.close()
-    elapsed = time.perf_counter() - start
-    for path, why in failures.items() if analyses else ():
-        # (with no bag analysed the command's one error line below names every reason)
-        print(f"fourws analyze: error: {why}", file=sys.stderr)
-    for r in analyses:
-        for metric, why in r.unavailable.items():
-            if _expected(metric, r):
-                continue
-            print(f"fourws analyze: {r.name}: {metric} not computed: {why}", file=sys.stderr)
-    if args.json:
-        print(json.dumps({"runs": {r.name: r.metrics() for r in analyses},
-                          "failed_bags": failures}, indent=2))
-    elif not args.report:
+            self.bar(f"reading {path}")
+            try:
+                run_data = bagmod.load_bag(path, allow_incomplete=self.args.allow_incomplete)
+                uniform = bagmod.resample(run_data, self.args.dt)
+            except FourwsError as exc:
+                self.failures[path] = one_line(exc)
+                return
+            base, k = uniform.name, 2
+            while uniform.name in {a.name for a in self.analyses}:  # labels key the metrics
+                uniform.name, k = f"{base}#{k}", k + 1
+            result = analyze_run(uniform, eig_sweep=not self.args.no_sweep, progress=self.bar)
+            result.notes.extend(run_data.warnings)
+            result.recording = ("complete" if run_data.complete else "unverified"
+                                if run_data.complete is None else
+                                "INCOMPLETE: " + "; ".join(run_data.problems))
+            self.analyses.append(result)
+        finally:
+            self.busy_s += time.perf_counter() - start
+
+    def finish(self) -> int:
+        """Write the report, print the results; the command's exit code."""
+        from fourws_analysis.report import write_report  # scipy, control: not for --help
+
+        args, analyses, failures = self.args, self.analyses, self.failures
+        start = time.perf_counter()
+        index = None
+        if args.report:
+            index = write_report(analyses, args.report, failures, progress=self.bar)
+        self.bar.close()
+        self.busy_s += time.perf_counter() - start
+        for path, why in failures.items() if analyses else ():
+            # (with no bag analysed the command's one error line below names every reason)
+            print(f"fourws analyze: error: {why}", file=sys.stderr)
         for r in analyses:
-            _print_summary(r)
-    if index is not None:
-        print(f"report: {index}")
-    if args.timing:
-        print(f"analysed {len(analyses)} bag(s) in {elapsed:.2f} s", file=sys.stderr)
-    if not analyses:
-        raise FourwsError("no bag could be analysed: " + "; ".join(failures.values()))
-    return 1 if failures else 0
+            for metric, why in r.unavailable.items():
+                if _expected(metric, r):
+                    continue
+                print(f"fourws analyze: {r.name}: {metric} not computed: {why}",
+                      file=sys.stderr)
+        if args.json:
+            print(json.dumps({"runs": {r.name: r.metrics() for r in analyses},
+                              "failed_bags": failures}, indent=2))
+        elif not args.report:
+            for r in analyses:
+                _print_summary(r)
+        if index is not None:
+            print(f"report: {index}")
+        if args.timing:
+            print(f"analysed {len(analyses)} bag(s) in {self.busy_s:.2f} s", file=sys.stderr)
+        if not analyses:
+            raise FourwsError("no bag could be analysed: " + "; ".join(failures.values()))
+        return 1 if failures else 0
 
 
 def _expected(metric: str, r: Any) -> bool:

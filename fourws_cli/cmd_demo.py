@@ -5,7 +5,9 @@
 Runs ``config/scenarios/default.yaml`` (step steer at 85 km/h on the 8-DOF ``table_8_1`` car)
 once per law of the scenario (FWS and two 4WS laws) through the ROS 2 node graph, each run
 recorded to a rosbag2 MCAP bag, then analyses the bags together into an HTML report. This is
-what ``make demo`` runs.
+what ``make demo`` runs. The analysis runs in a process of its own
+(:mod:`fourws_cli.background_analysis`), each bag while the next law runs; should that process
+fail, the demo analyses the bags itself.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import time
 from pathlib import Path
 
 from fourws_cli import cmd_analyze
+from fourws_cli.background_analysis import BackgroundAnalysis
 
 HELP = "run the default scenario for FWS and two 4WS laws through the node graph, then report"
 
@@ -40,25 +43,35 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     print(f"fourws demo: scenario {scenario.name!r}, laws {', '.join(scenario.laws)}, "
           f"output {out}", flush=True)
-    bags: list[str] = []
-    failed: list[str] = []
-    for law in scenario.laws:
-        result = run_graph(RunConfig.from_scenario(scenario, law), out, run_name=law)
-        print("\n".join(result.summary_lines()), flush=True)
-        if result.interrupted:
-            return 130
-        if result.ok and result.bag_path is not None:
-            bags.append(str(result.bag_path))
-        else:
-            failed.append(f"{law}: {result.reason}")
-    if not bags:
-        print("fourws demo: no run succeeded: " + "; ".join(failed))
-        return 1
     report_dir = out / "report"
-    parser = argparse.ArgumentParser()
-    cmd_analyze.add_arguments(parser)  # the analyze command's own options and defaults
-    analyze_args = parser.parse_args([*bags, "--report", str(report_dir), "--timing"])
-    code = cmd_analyze.run(analyze_args)
+    # the analyze command's own options and defaults; the bags are the runs' that succeed
+    analyze_argv = [*(str(out / law / "bag") for law in scenario.laws), "--report",
+                    str(report_dir), "--timing"]
+    report = BackgroundAnalysis([*analyze_argv, "--quiet"])
+    try:
+        bags: list[str] = []
+        failed: list[str] = []
+        for law in scenario.laws:
+            result = run_graph(RunConfig.from_scenario(scenario, law), out, run_name=law)
+            print("\n".join(result.summary_lines()), flush=True)
+            if result.interrupted:
+                return 130
+            if result.ok and result.bag_path is not None:
+                bags.append(str(result.bag_path))
+                report.add(str(result.bag_path))  # analysed while the next law runs
+            else:
+                failed.append(f"{law}: {result.reason}")
+        if not bags:
+            print("fourws demo: no run succeeded: " + "; ".join(failed))
+            return 1
+        code = report.finish()
+    finally:
+        report.close()
+    if code is None:  # the report's own process could not: here, as `fourws analyze` does
+        print(f"fourws demo: {report.problem}; analysing the bags here", flush=True)
+        parser = argparse.ArgumentParser()
+        cmd_analyze.add_arguments(parser)
+        code = cmd_analyze.run(parser.parse_args([*bags, *analyze_argv[len(scenario.laws):]]))
     print("fourws demo: bags:")
     for bag in bags:
         print(f"  {bag}")

@@ -1,0 +1,126 @@
+# SPDX-FileCopyrightText: 2026 fourws developers
+# SPDX-License-Identifier: Apache-2.0
+"""``fourws demo``'s report process (fourws_cli/background_analysis.py): the report it writes
+is ``fourws analyze``'s, and whatever happens to it (killed, stopped, failing) the demo still
+writes the report, naming in one line why it analysed the bags itself."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from fourws_cli import cmd_demo
+from fourws_cli.background_analysis import BackgroundAnalysis
+from fourws_cli.main import main
+from fourws_sim.params import vehicle_from_mapping
+
+from test_analysis_frequency import SET_1
+from test_analysis_report import SPEED, _step_bag
+
+
+def _gain(report: Path, run: str) -> float:
+    metrics = json.loads((report / "metrics.json").read_text())["runs"][run]
+    return metrics["iso7401_step"]["yaw_rate_radps"][
+        "steady_state_gain_radps_per_rad_road_wheel"]
+
+
+def test_the_report_process_writes_what_analyze_writes(tmp_path: Path) -> None:
+    """Two bags added one at a time: exit 0, and the yaw gain of each is the in-process
+    ``fourws analyze``'s (same code, another process) and the 2-DOF analytic
+    U/(L + K_us U^2) within 0.1 %; a third, missing bag is a failure named, exit 1."""
+    for name in ("a", "b"):
+        _step_bag(tmp_path / name)
+    assert main(["analyze", str(tmp_path / "a"), "--report", str(tmp_path / "here"),
+                 "--quiet"]) == 0
+    bags = [str(tmp_path / name) for name in ("a", "b", "missing")]
+    worker = BackgroundAnalysis([*bags, "--report", str(tmp_path / "there"), "--quiet"])
+    try:
+        for name in ("a", "b", "missing"):
+            worker.add(str(tmp_path / name))
+        code = worker.finish()
+    finally:
+        worker.close()
+    assert worker.problem == "" and code == 1
+    vehicle = vehicle_from_mapping(SET_1)
+    analytic = SPEED / (vehicle.chassis.wheelbase_m
+                        + vehicle.understeer_gradient_rad_per_mps2 * SPEED ** 2)
+    for run in ("a", "b"):
+        assert _gain(tmp_path / "there", run) == _gain(tmp_path / "here", "a")
+        assert _gain(tmp_path / "there", run) == pytest.approx(analytic, rel=1e-3)
+    failed = json.loads((tmp_path / "there" / "metrics.json").read_text())["failed_bags"]
+    assert list(failed) == [str(tmp_path / "missing")]
+
+
+@pytest.mark.parametrize("how", ["killed", "stopped"])
+def test_a_killed_or_stopped_report_process_is_named_not_waited_for(
+        tmp_path: Path, how: str) -> None:
+    """SIGKILL: finish says the process ended with exit code -9; SIGSTOP: that it is stopped
+    (not a wait without end); both None (the demo then analyses here), the process gone."""
+    _step_bag(tmp_path / "a")
+    worker = BackgroundAnalysis([str(tmp_path / "a"), "--report", str(tmp_path / "rep"),
+                                 "--quiet"])
+    try:
+        worker.add(str(tmp_path / "a"))
+        pid = worker._proc.pid
+        os.kill(pid, signal.SIGKILL if how == "killed" else signal.SIGSTOP)
+        code = worker.finish()
+    finally:
+        worker.close()
+    assert code is None
+    assert worker.problem == {"killed": "the report's process ended (exit code -9)",
+                              "stopped": "the report's process is stopped (SIGSTOP)"}[how]
+    assert not worker._proc.is_alive()
+
+
+def test_refused_arguments_are_a_failure_named() -> None:
+    """No bag given: argparse refuses (exit code 2 in the worker); finish says so."""
+    worker = BackgroundAnalysis(["--quiet"])
+    try:
+        code = worker.finish()
+    finally:
+        worker.close()
+    assert code is None
+    assert worker.problem == ("the report's process failed: its arguments were refused "
+                              "(exit code 2)")
+
+
+class _DyingReport(BackgroundAnalysis):
+    """The report process, killed after its first bag."""
+
+    def add(self, path: str) -> None:
+        super().add(path)
+        if self._proc.exitcode is None:  # (the first bag's; it is gone for the others)
+            os.kill(self._proc.pid, signal.SIGKILL)
+            self._proc.join(timeout=10.0)
+
+
+def test_the_demo_writes_the_report_itself_when_its_report_process_dies(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    """The demo's three runs (bags written here in place of the graph's), the report process
+    killed: exit 0, one line naming the cause, and the report of all three bags, each bag's
+    yaw gain the analytic one."""
+    import fourws_ros.graph_run
+
+    def fake_run_graph(config, out, run_name):
+        _step_bag(out / run_name / "bag")
+        return SimpleNamespace(summary_lines=lambda: [f"run {run_name}: ok"], interrupted=False,
+                               ok=True, bag_path=out / run_name / "bag", reason="")
+
+    monkeypatch.setattr(fourws_ros.graph_run, "run_graph", fake_run_graph)
+    monkeypatch.setattr(cmd_demo, "BackgroundAnalysis", _DyingReport)
+    start = time.monotonic()
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("fourws demo: the report's process ended (exit code -9); "
+                     "analysing the bags here") == 1
+    metrics = json.loads((tmp_path / "report" / "metrics.json").read_text())
+    assert len(metrics["runs"]) == 3
+    gains = {_gain(tmp_path / "report", run) for run in metrics["runs"]}
+    assert len(gains) == 1  # the same bag three times
+    assert time.monotonic() - start < 600  # (a bound on a hang, not a speed)
