@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import json
 import math
-from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -52,6 +51,7 @@ from fourws_analysis import frequency as fq
 from fourws_analysis import (critical_speeds, identify, iso4138, iso7401, lane_change, linear,
                              linearize, standards, units)
 from fourws_analysis.bag import MetricUnavailableError, UniformRun
+from fourws_analysis.memo import Memo
 from fourws_control import Law, LinearGains, make_law
 from fourws_sim.errors import FourwsError
 from fourws_sim.models import get_model
@@ -74,18 +74,15 @@ STEER_REFERENCES = {
 }
 
 Progress = Callable[[str], None]
-#: Results kept per cache below, the most recently used (a sweep is about 2 kB): a long Monte
-#: Carlo study, whose every vehicle has its own, does not keep them all.
+#: Results kept per memo below, the most recently used (a sweep is about 2 kB).
 _CACHE_SIZE = 256
-#: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options, least
-#: recently used first.
-_SWEEP_CACHE: OrderedDict[str, linearize.EigenSweep | None] = OrderedDict()
+#: Eigenvalue sweeps already computed in this process, by vehicle/law/belief/options.
+_SWEEP_CACHE: Memo[linearize.EigenSweep] = Memo(_CACHE_SIZE)
 #: Level comparisons (critical speeds per model level) likewise.
-_LEVELS_CACHE: OrderedDict[str, critical_speeds.LevelComparison | None] = OrderedDict()
+_LEVELS_CACHE: Memo[critical_speeds.LevelComparison] = Memo(_CACHE_SIZE)
 #: Open-loop 8-DOF Jacobians at straight running already computed in this process, by vehicle
 #: and speed (a run's overlays, its sampled loop and the points of a study share them).
-_JACOBIAN_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-_JACOBIAN_CACHE_SIZE = 256
+_JACOBIAN_CACHE: Memo[tuple[np.ndarray, np.ndarray]] = Memo(_CACHE_SIZE)
 
 
 @dataclass
@@ -306,16 +303,15 @@ def _eightdof_loop(vehicle: Any, speed_mps: float, law: Any, belief_vehicle: Any
     ``(a, b, gains, model module)``, ``delta_r = K_x x + K_u u``. ``law`` is a name (built on
     the belief vehicle with ``law_options``) or a built law."""
     mod = get_model("8dof")
-    key = json.dumps([vehicle.cache_key(), float(speed_mps)])
-    if key not in _JACOBIAN_CACHE:
+
+    def jacobians() -> tuple[np.ndarray, np.ndarray]:
         p = mod.params_for(vehicle)
         x0 = mod.initial_state(p, speed_mps)
-        u0 = np.zeros(len(mod.INPUT))
-        if len(_JACOBIAN_CACHE) >= _JACOBIAN_CACHE_SIZE:
-            _JACOBIAN_CACHE.pop(next(iter(_JACOBIAN_CACHE)))
-        _JACOBIAN_CACHE[key] = linearize.jacobians(linearize.model_derivatives(mod), x0,
-                                                   u0, p)
-    a, b = (m.copy() for m in _JACOBIAN_CACHE[key])
+        return linearize.jacobians(linearize.model_derivatives(mod), x0,
+                                   np.zeros(len(mod.INPUT)), p)
+
+    kept = _JACOBIAN_CACHE.get(json.dumps([vehicle.cache_key(), float(speed_mps)]), jacobians)
+    a, b = (m.copy() for m in kept)  # type: ignore[union-attr]
     law_obj = law if isinstance(law, Law) else make_law(
         law, belief_vehicle if belief_vehicle is not None else vehicle,
         **dict(law_options or {}))
@@ -423,18 +419,6 @@ def _sampled_models(res: RunAnalysis, vehicle: Any, speed: float, period: float,
             res.sampled[model] = loop
 
 
-def _cached(cache: OrderedDict[str, Any], key: str, compute: Callable[[], Any]) -> Any:
-    """``cache[key]``, computed by ``compute`` the first time; ``cache`` keeps the
-    :data:`_CACHE_SIZE` most recently used results."""
-    if key in cache:
-        cache.move_to_end(key)
-        return cache[key]
-    found = cache[key] = compute()
-    if len(cache) > _CACHE_SIZE:
-        cache.popitem(last=False)  # the least recently used
-    return found
-
-
 def _law_key(res: RunAnalysis, vehicle: Any, belief: Any, options: Mapping[str, Any]) -> str:
     """The key of what depends on the car, the run's law, its belief and its options."""
     return json.dumps([vehicle.cache_key(), res.law,
@@ -446,10 +430,29 @@ def _levels(res: RunAnalysis, vehicle: Any, belief: Any,
             options: Mapping[str, Any]) -> critical_speeds.LevelComparison | None:
     """Every model level's critical and characteristic speeds of the run's car, FWS and its
     law (built as the run built it), shared by the runs of one car and law."""
-    return _cached(_LEVELS_CACHE, _law_key(res, vehicle, belief, options),
-                   lambda: _try(res, "critical_speeds", lambda: critical_speeds.compare_levels(
-                       vehicle, make_law(res.law, belief if belief is not None else vehicle,
-                                         **dict(options)))))
+    def levels() -> critical_speeds.LevelComparison:
+        law = make_law(res.law, belief if belief is not None else vehicle, **dict(options))
+        return critical_speeds.compare_levels(vehicle, law)
+
+    return _LEVELS_CACHE.get(_law_key(res, vehicle, belief, options),
+                             lambda: _try(res, "critical_speeds", levels))
+
+
+def prepare(config: Mapping[str, Any], *, eig_sweep: bool = True) -> None:
+    """Compute ahead what the analysis of every bag recorded with the run configuration
+    ``config`` (the mapping of ``/fourws/run_config``) shares with the other runs of its car
+    and law, into this process's caches: the critical speeds per model level and the 8-DOF
+    eigenvalues vs speed. :func:`analyze_run` of such a bag then finds them; the results are
+    the same either way. ``fourws demo`` calls it while the run is recorded. What cannot be
+    computed is left out here, so the analysis of the bag computes it and says why."""
+    run = UniformRun(name="", time_s=np.zeros(1), dt_s=1.0, channels={}, config=dict(config))
+    res = RunAnalysis(run=run, speed_mps=math.nan)
+    setting = _law_setting(res)
+    if setting.vehicle is None:
+        return
+    _levels(res, setting.vehicle, setting.belief, setting.options)
+    if eig_sweep and setting.vehicle.body is not None:
+        _eigen_sweep(res, setting)
 
 
 def _past_limits(res: RunAnalysis, metric: str) -> bool:
@@ -714,5 +717,5 @@ def _eigen_sweep(res: RunAnalysis, setting: _LawSetting) -> linearize.EigenSweep
             lat = _lateral_modes(r)
             arr[k, :lat.size] = lat
         return linearize.EigenSweep("8dof", np.asarray(SWEEP_SPEEDS_MPS), arr)
-    return _cached(_SWEEP_CACHE, _law_key(res, vehicle, belief, options),
-                   lambda: _try(res, "eigenvalues_vs_speed", sweep))
+    return _SWEEP_CACHE.get(_law_key(res, vehicle, belief, options),
+                            lambda: _try(res, "eigenvalues_vs_speed", sweep))

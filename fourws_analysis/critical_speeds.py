@@ -46,6 +46,7 @@ import numpy as np
 
 from fourws_analysis import linear, linearize, units
 from fourws_analysis.frequency import dc_gain
+from fourws_analysis.memo import Memo
 from fourws_control import Law, make_law
 from fourws_sim.errors import FourwsError
 from fourws_sim.params import Vehicle
@@ -193,6 +194,21 @@ class LevelSpeeds:
                 "unavailable": self.unavailable or None}
 
 
+#: FWS critical speeds already found in this process, by level, range and vehicle: every
+#: law's comparison of one car starts from the same FWS speeds (a demo's laws of one car).
+_FWS_CACHE: Memo[linear.CriticalSpeed] = Memo(64)
+
+
+def _fws_critical_speed(level: str, vehicle: Vehicle, speed_range_mps: tuple[float, float]
+                        ) -> linear.CriticalSpeed:
+    """:func:`critical_speed` of ``vehicle`` without rear steer (kept in :data:`_FWS_CACHE`;
+    a search that raises is not kept)."""
+    key = f"{level}|{tuple(float(s) for s in speed_range_mps)}|{vehicle.cache_key()}"
+    found = _FWS_CACHE.get(key, lambda: critical_speed(level, vehicle, "fws", speed_range_mps))
+    assert found is not None  # (critical_speed returns a result or raises)
+    return found
+
+
 def level_speeds(level: str, vehicle: Vehicle, law: Law | str | None = "fws",
                  speed_range_mps: tuple[float, float] = linear.CRITICAL_SPEED_RANGE_MPS
                  ) -> LevelSpeeds:
@@ -206,7 +222,7 @@ def level_speeds(level: str, vehicle: Vehicle, law: Law | str | None = "fws",
     law_obj = _law(law, vehicle)
     try:
         k = understeer_gradient(level, vehicle)
-        fws = critical_speed(level, vehicle, "fws", speed_range_mps)
+        fws = _fws_critical_speed(level, vehicle, speed_range_mps)
         with_law = fws if law_obj.name == "fws" else \
             critical_speed(level, vehicle, law_obj, speed_range_mps)
     except (FourwsError, np.linalg.LinAlgError) as exc:

@@ -7,7 +7,11 @@ control's alone about 1 s, then about 1 s per bag). The worker imports them whil
 run starts and analyses each bag while the next run goes on, so after the last run only that
 bag and the report remain. The worker is ``nice`` (the graph's runs keep the CPU: their answer
 chain runs at SCHED_FIFO, the recorder and the launcher at normal priority) and ignores SIGINT
-(the demo decides what an interrupt stops; it ends the worker).
+(the demo decides what an interrupt stops; it ends the worker). It is a program of its own
+(``python -m fourws_cli.background_analysis FD``, a socket to the demo), not a
+:mod:`multiprocessing` child: the demo's process holds DDS threads, which a fork must not copy,
+and multiprocessing's spawn runs the caller's main script again in the child (a user's script
+that calls the demo without a ``__main__`` guard would run twice).
 
 Whatever happens to the worker (it cannot start, dies, is killed or stopped with SIGSTOP,
 raises), :meth:`BackgroundAnalysis.finish` returns None and says why in one line: the demo then
@@ -17,20 +21,20 @@ analyses the bags in its own process, so a report is always written or its failu
 from __future__ import annotations
 
 import argparse
-import multiprocessing
+import json
 import os
 import signal
+import socket
+import subprocess
 import sys
 import traceback
+from multiprocessing.connection import Connection
 from typing import Any
 
 from fourws_cli import cmd_analyze
 from fourws_ros.oslevel import is_stopped
 from fourws_sim.errors import FourwsError, one_line
 
-#: How the worker is started: a fresh interpreter (the demo's process holds DDS threads,
-#: which a fork must not copy).
-START_METHOD = "spawn"
 #: The worker's niceness increment (``os.nice``).
 NICENESS = 10
 #: How often the demo looks at a worker it waits for (alive, not stopped), s.
@@ -61,6 +65,12 @@ def _serve(conn: Any, argv: list[str]) -> None:
                 kind, path = conn.recv()
             except (EOFError, OSError):
                 return  # the demo ended
+            if kind == "prepare":
+                try:
+                    analysis.prepare(json.loads(path))
+                except Exception:  # noqa: BLE001 - ahead of time only: the bag's says why
+                    pass
+                continue
             if kind == "add":
                 analysis.add(path)
                 conn.send(("added", path))
@@ -93,27 +103,41 @@ class BackgroundAnalysis:
     def __init__(self, argv: list[str]) -> None:
         """Start the worker for ``fourws analyze`` ``argv``: its bags are the ones expected,
         but only those given to :meth:`add` are analysed (a run that failed has none)."""
-        context = multiprocessing.get_context(START_METHOD)
-        self._conn, child = context.Pipe()
-        self._proc = context.Process(target=_serve, args=(child, argv), daemon=True,
-                                     name="fourws-report")
         self.problem = ""
         self.added: list[str] = []
+        ours, theirs = socket.socketpair()
+        self._conn = Connection(ours.detach())
+        self._proc: subprocess.Popen[bytes] | None = None
         try:
-            self._proc.start()
+            self._proc = subprocess.Popen(
+                [sys.executable, "-m", "fourws_cli.background_analysis",
+                 str(theirs.fileno()), *argv],
+                stdin=subprocess.DEVNULL, pass_fds=(theirs.fileno(),))
         except OSError as exc:
             self.problem = f"cannot start the report's process: {exc.strerror or exc}"
-        child.close()
+        finally:
+            theirs.close()
+
+    def prepare(self, config_json: str) -> None:
+        """Have the worker compute ahead what the bags of a run of ``config_json`` (the text
+        of its ``/fourws/run_config``) share with the runs of its car and law (queued)."""
+        self._request("prepare", config_json)
 
     def add(self, path: str) -> None:
         """Have the worker analyse the bag ``path`` (queued; nothing waits for it here)."""
-        if self.problem:
-            return
-        try:
-            self._conn.send(("add", path))
+        if self._request("add", path):
             self.added.append(path)
+
+    def _request(self, kind: str, value: str) -> bool:
+        """Send a request (False: the worker cannot take it, ``problem`` says why)."""
+        if self.problem:
+            return False
+        try:
+            self._conn.send((kind, value))
         except OSError as exc:
             self._gone(f"cannot be reached: {exc.strerror or exc}")
+            return False
+        return True
 
     def finish(self) -> int | None:
         """Write the report and print what ``fourws analyze`` prints: its exit code, or None
@@ -143,24 +167,40 @@ class BackgroundAnalysis:
     def _gone(self, otherwise: str) -> None:
         """The worker's end failed: name why, its exit above all (a killed process closes its
         end before its exit status can be read, so wait for it a moment)."""
-        self._proc.join(timeout=GONE_WAIT_S)
+        try:
+            if self._proc is not None:
+                self._proc.wait(timeout=GONE_WAIT_S)
+        except subprocess.TimeoutExpired:
+            pass
         self._check_alive()
         self.problem = self.problem or f"the report's process {otherwise}"
 
     def _check_alive(self) -> None:
-        if not self._proc.is_alive():
-            self.problem = f"the report's process ended (exit code {self._proc.exitcode})"
+        if self._proc is None:
+            return
+        if self._proc.poll() is not None:
+            self.problem = f"the report's process ended (exit code {self._proc.returncode})"
         elif is_stopped(self._proc.pid):
             self.problem = "the report's process is stopped (SIGSTOP)"
 
     def close(self) -> None:
         """End the worker (at once if it has not finished)."""
-        if self._proc.pid is None:
-            return
-        if self._proc.is_alive():
-            self._proc.kill()
-        self._proc.join(timeout=5.0)
         self._conn.close()
+        if self._proc is None:
+            return
+        if self._proc.poll() is None:
+            self._proc.kill()
+        self._proc.wait()
 
 
-__all__ = ["BackgroundAnalysis", "GONE_WAIT_S", "NICENESS", "POLL_S", "START_METHOD"]
+def main(argv: list[str]) -> int:
+    """The worker process (``python -m fourws_cli.background_analysis FD ARGS...``)."""
+    _serve(Connection(int(argv[0])), argv[1:])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
+
+
+__all__ = ["BackgroundAnalysis", "GONE_WAIT_S", "NICENESS", "POLL_S", "main"]

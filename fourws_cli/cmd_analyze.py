@@ -12,7 +12,7 @@ import json
 import math
 import sys
 import time
-from typing import Any
+from typing import Any, Mapping
 
 from fourws_sim.errors import FourwsError, ParameterError, one_line
 
@@ -88,6 +88,17 @@ class BagAnalysis:
         self.analyses: list[Any] = []
         self.failures: dict[str, str] = {}
         self.busy_s = 0.0  # the time spent analysing (a demo's runs go on between bags)
+
+    def prepare(self, config: Mapping[str, Any]) -> None:
+        """Compute ahead what every bag of a run of ``config`` (its ``/fourws/run_config``)
+        shares with the runs of its car and law (:func:`fourws_analysis.compare.prepare`)."""
+        from fourws_analysis import compare  # scipy, control: not for --help
+
+        start = time.perf_counter()
+        try:
+            compare.prepare(config, eig_sweep=not self.args.no_sweep)
+        finally:
+            self.busy_s += time.perf_counter() - start
 
     def add(self, path: str) -> None:
         """Read, resample and analyse one bag (a bag that cannot be read is a failure)."""

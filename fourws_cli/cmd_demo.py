@@ -34,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the scenario's laws, analyse the bags, print where everything is."""
     from fourws_ros.domains import domain_for_run  # fourws_ros: not for --help
     from fourws_ros.graph_run import run_graph  # rclpy: not for --help
+    from fourws_ros.node_params import dumps_config  # rclpy: not for --help
     from fourws_run.config import RunConfig  # rosbags, mcap: not for --help
     from fourws_run.scenario import load_scenario  # rosbags, mcap: not for --help
 
@@ -48,11 +49,14 @@ def run(args: argparse.Namespace) -> int:
     analyze_argv = [*(str(out / law / "bag") for law in scenario.laws), "--report",
                     str(report_dir), "--timing"]
     report = BackgroundAnalysis([*analyze_argv, "--quiet"])
+    configs = {law: RunConfig.from_scenario(scenario, law) for law in scenario.laws}
+    for config in configs.values():  # each law's critical speeds while the first law runs
+        report.prepare(dumps_config(config.to_dict()))
     try:
         bags: list[str] = []
         failed: list[str] = []
-        for law in scenario.laws:
-            result = run_graph(RunConfig.from_scenario(scenario, law), out, run_name=law)
+        for law, config in configs.items():
+            result = run_graph(config, out, run_name=law)
             print("\n".join(result.summary_lines()), flush=True)
             if result.interrupted:
                 return 130

@@ -557,13 +557,12 @@ def test_eigenvalue_sweeps_are_kept_for_the_most_recent_vehicles_only(monkeypatc
     goes), a kept sweep is returned itself, an evicted one is computed again with the same
     numbers; its first row is the fws loop's lateral eigenvalues at the sweep's first speed
     (eightdof_linear_system)."""
-    from collections import OrderedDict
     from types import SimpleNamespace
 
     from fourws_analysis import compare as C
+    from fourws_analysis.memo import Memo
 
-    monkeypatch.setattr(C, "_SWEEP_CACHE", OrderedDict())
-    monkeypatch.setattr(C, "_CACHE_SIZE", 2)
+    monkeypatch.setattr(C, "_SWEEP_CACHE", Memo(2))
     cars = [load_vehicle("table_8_1").with_axle_tires(s) for s in (0.8, 1.0, 1.2)]
     res = SimpleNamespace(law="fws", unavailable={})
 
@@ -628,3 +627,62 @@ def test_a_spun_run_is_flagged_and_gives_no_step_metrics(tmp_path: Path, capsys)
     B.write_run(tmp_path / "cut", result.time_s, result.outputs, result.config,
                 driver=result.driver, model=result.model)
     assert B.resample(B.load_bag(tmp_path / "cut")).vehicle_breach is None
+
+
+def test_prepared_critical_speeds_are_the_ones_the_analysis_uses(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``compare.prepare`` of a run configuration (the 8-DOF table_8_1 with sol1, as
+    ``fourws demo`` sends it ahead of the run): the analysis of a bag with that configuration
+    then searches no critical speed and computes no eigenvalue sweep, and its per-level
+    speeds are exactly those of ``critical_speeds.compare_levels`` called directly (the
+    8-DOF FWS one 32.77 m/s, about 118 km/h, as test_critical_speeds pins)."""
+    from fourws_analysis import compare as C
+    from fourws_analysis import critical_speeds as CS
+    from fourws_analysis.memo import Memo
+
+    for name in ("_SWEEP_CACHE", "_LEVELS_CACHE"):
+        monkeypatch.setattr(C, name, Memo(4))
+    monkeypatch.setattr(CS, "_FWS_CACHE", Memo(4))
+    car = load_vehicle("table_8_1")
+    config = {**_config("step_steer"), "vehicle": car.to_dict(), "law": "sol1"}
+    t = np.arange(0.0, 6.0, 2e-3)
+    delta = np.where(t >= 1.0, math.radians(2.0), 0.0)
+    B.write_run(tmp_path / "bag", t, simulate_2dof(vehicle_from_mapping(SET_1), SPEED, t,
+                                                   delta), config, model="2dof")
+    C.prepare(json.loads(json.dumps(config)))
+    assert len(C._LEVELS_CACHE) == 1 and len(C._SWEEP_CACHE) == 1
+    calls: list[str] = []
+    real = CS.compare_levels
+    monkeypatch.setattr(CS, "compare_levels", lambda *a, **k: calls.append("levels")
+                        or real(*a, **k))
+    sweep = C.linearize.EigenSweep
+    monkeypatch.setattr(C.linearize, "EigenSweep", lambda *a, **k: calls.append("sweep")
+                        or sweep(*a, **k))
+    res = analyze_run(B.resample(B.load_bag(tmp_path / "bag"), None))
+    assert calls == [] and res.eig_sweep is not None
+    levels = res.levels
+    assert levels is not None and "critical_speeds" not in res.unavailable
+    direct = real(car, "sol1")
+    assert levels.to_dict() == direct.to_dict()
+    assert direct.by_level("8dof-lin").critical_speed_mps == pytest.approx(32.77, abs=0.01)
+
+
+def test_a_failed_computation_is_not_kept_so_every_run_is_told_why() -> None:
+    """Memo: a None (a metric that could not be computed, whose reason went to the run that
+    asked) is computed again for the next caller (2 calls, not 1), a result is kept (1 call
+    for 2 asks), and beyond its size the least recently used result goes (3 keys, size 2)."""
+    from fourws_analysis.memo import Memo
+
+    memo: Memo[int] = Memo(2)
+    calls: list[str] = []
+    for _ in range(2):
+        assert memo.get("failed", lambda: calls.append("failed")) is None
+        assert memo.get("a", lambda: calls.append("a") or 1) == 1
+    assert calls == ["failed", "a", "failed"] and len(memo) == 1
+    memo.get("b", lambda: 2)
+    memo.get("a", lambda: calls.append("a") or 1)  # a used after b: b is the oldest
+    memo.get("c", lambda: 3)
+    assert memo.get("b", lambda: calls.append("b") or 2) == 2
+    assert calls == ["failed", "a", "failed", "b"] and len(memo) == 2
+    with pytest.raises(ValueError):
+        Memo(0)

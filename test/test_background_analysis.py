@@ -9,6 +9,8 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
+import sys
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -75,7 +77,7 @@ def test_a_killed_or_stopped_report_process_is_named_not_waited_for(
     assert code is None
     assert worker.problem == {"killed": "the report's process ended (exit code -9)",
                               "stopped": "the report's process is stopped (SIGSTOP)"}[how]
-    assert not worker._proc.is_alive()
+    assert worker._proc.poll() is not None
 
 
 def test_refused_arguments_are_a_failure_named() -> None:
@@ -95,9 +97,9 @@ class _DyingReport(BackgroundAnalysis):
 
     def add(self, path: str) -> None:
         super().add(path)
-        if self._proc.exitcode is None:  # (the first bag's; it is gone for the others)
+        if self._proc.poll() is None:  # (the first bag's; it is gone for the others)
             os.kill(self._proc.pid, signal.SIGKILL)
-            self._proc.join(timeout=10.0)
+            self._proc.wait(timeout=10.0)
 
 
 def test_the_demo_writes_the_report_itself_when_its_report_process_dies(
@@ -124,3 +126,27 @@ def test_the_demo_writes_the_report_itself_when_its_report_process_dies(
     gains = {_gain(tmp_path / "report", run) for run in metrics["runs"]}
     assert len(gains) == 1  # the same bag three times
     assert time.monotonic() - start < 600  # (a bound on a hang, not a speed)
+
+
+def test_a_script_without_a_main_guard_runs_once(tmp_path: Path) -> None:
+    """A user's script that starts the report process at its top level (no ``__main__``
+    guard): the script runs once (a multiprocessing spawn would run it again in the child,
+    and there start a second worker), the report is written (exit 0)."""
+    _step_bag(tmp_path / "a")
+    runs = tmp_path / "runs.txt"
+    script = tmp_path / "user_script.py"
+    script.write_text(
+        "import sys\n"
+        f"open({str(runs)!r}, 'a').write('ran\\n')\n"
+        "from fourws_cli.background_analysis import BackgroundAnalysis\n"
+        f"w = BackgroundAnalysis([{str(tmp_path / 'a')!r}, '--report', "
+        f"{str(tmp_path / 'rep')!r}, '--quiet'])\n"
+        f"w.add({str(tmp_path / 'a')!r})\n"
+        "code = w.finish()\n"
+        "w.close()\n"
+        "sys.exit(3 if code is None else code)\n")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=600, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert runs.read_text() == "ran\n"
+    assert (tmp_path / "rep" / "metrics.json").is_file()
