@@ -55,11 +55,11 @@ import time
 from typing import Any
 
 from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetParametersResult)
-from rclpy.node import Node
 
 from fourws_control import RearSteerActuator, available_laws, make_loop_law
 from fourws_ros import conversions, peers, reporting, topics
 from fourws_ros.identity import PublisherNames, RunNodeFilter, drain
+from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import EXIT_PEERS, run_node
 from fourws_run import codecs
 from fourws_run.ticks import StateGate, law_input
@@ -79,7 +79,7 @@ def _float_range(lo: float, hi: float) -> list[FloatingPointRange]:
     return [FloatingPointRange(from_value=lo, to_value=hi)]
 
 
-class ControllerNode(Node):
+class ControllerNode(FourwsNode):
     """Rear-steer controller (see module docstring)."""
 
     #: Driver inputs are taken from the run's maneuver node only, told by the publisher of

@@ -19,14 +19,14 @@ import tty
 from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
-from rclpy.node import Node
 
 from fourws_ros import topics
+from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import EXIT_USER_ERROR, run_node
 from fourws_sim.input_drivers import KeyboardAxes
 
 
-class KeyboardDriverNode(Node):
+class KeyboardDriverNode(FourwsNode):
     """Keys to ``/joy`` (module docstring)."""
 
     def __init__(self) -> None:

@@ -30,6 +30,7 @@ from std_srvs.srv import SetBool
 from fourws_ros import topics
 from fourws_ros.domains import graph_env
 from fourws_ros.identity import PublisherNames, drain
+from fourws_ros.node_base import FourwsNode
 from fourws_run.verdict import ManeuverReport, SimReport
 
 Role = topics.Role
@@ -146,9 +147,8 @@ class LauncherNode:
             rclpy.init(args=[], context=self.context, domain_id=domain_id,
                        signal_handler_options=SignalHandlerOptions.NO)
             # no parameter services: fewer entities to destroy at the close (above)
-            self.node = rclpy.create_node(topics.NODE_NAMES[Role.LAUNCHER],
-                                          context=self.context, enable_rosout=False,
-                                          start_parameter_services=False)
+            self.node = FourwsNode(topics.NODE_NAMES[Role.LAUNCHER], context=self.context,
+                                   enable_rosout=False, start_parameter_services=False)
         finally:
             for key, value in saved.items():
                 if value is None:

@@ -31,10 +31,10 @@ from typing import Any, Callable
 
 import foxglove
 from rcl_interfaces.msg import IntegerRange, ParameterDescriptor, ParameterType
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from fourws_ros import topics
+from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import EXIT_USER_ERROR, run_node
 from fourws_run.bagfile import typestore
 from fourws_run.cdr import stamp_ns
@@ -59,7 +59,7 @@ def schema_of(msgtype: str) -> foxglove.Schema:
     return foxglove.Schema(name=msgtype, encoding="ros2msg", data=text.encode("utf-8"))
 
 
-class LiveViewNode(Node):
+class LiveViewNode(FourwsNode):
     """Bridges the run's topics to a Foxglove WebSocket server (module docstring)."""
 
     def __init__(self) -> None:

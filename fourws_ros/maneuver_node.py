@@ -37,9 +37,9 @@ import sys
 from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
-from rclpy.node import Node
 
 from fourws_ros import conversions, peers, reporting, topics
+from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import EXIT_PEERS, run_node
 from fourws_run import codecs
 from fourws_run.ticks import StateGate
@@ -51,7 +51,7 @@ STATUS_EVERY_STEPS = 100
 CLOCK_MODES = ("lockstep", "realtime")
 
 
-class ManeuverNode(Node):
+class ManeuverNode(FourwsNode):
     """Maneuver player (see module docstring)."""
 
     def __init__(self) -> None:

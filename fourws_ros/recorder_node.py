@@ -52,12 +52,12 @@ from typing import Any, Callable
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rclpy.clock import Clock, ClockType
-from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 
 from fourws_ros import peers, topics
 from fourws_ros.identity import (MAX_HELD, UNIDENTIFIED_AFTER_S, PublisherNames, drain,
                                  publisher_gid)
+from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import EXIT_INCOMPLETE, EXIT_PEERS, SPIN_TIMEOUT_S, run_node
 from fourws_run.accounting import REPORTING_ROLES, Ledger
 from fourws_run.bagfile import BagError, BagWriter
@@ -88,7 +88,7 @@ _NS_PER_S = 1_000_000_000
 _REPORT_TOPICS = (topics.SIM_STATUS, topics.MANEUVER_STATUS)
 
 
-class RecorderNode(Node):
+class RecorderNode(FourwsNode):
     """Records and accounts for the run's topics (see module docstring).
 
     Parameters (ROS)

@@ -42,10 +42,10 @@ from pathlib import Path
 from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
-from rclpy.node import Node
 from rosbags.rosbag2 import Reader, ReaderError
 
 from fourws_ros import conversions, reporting, topics
+from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import run_node
 from fourws_run.cdr import stamp_ns
 from fourws_run.ticks import Rejections
@@ -76,7 +76,7 @@ def read_bag_raw(path: Path, wanted: list[str] | None) -> list[tuple[int, str, b
         raise ParameterError("bag_path", f"cannot read bag {str(path)!r}: {exc}") from None
 
 
-class ReplayNode(Node):
+class ReplayNode(FourwsNode):
     """Bag player (see module docstring)."""
 
     def __init__(self) -> None:

@@ -49,11 +49,11 @@ import time
 from typing import Any
 
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
 from fourws_ros import conversions, peers, reporting, topics
 from fourws_ros.identity import PublisherNames, RunNodeFilter
+from fourws_ros.node_base import FourwsNode
 from fourws_ros.scene_publisher import ScenePublisher
 from fourws_ros.simulator_params import declare_parameters
 from fourws_ros.runtime import EXIT_PEERS, report_phase, run_node
@@ -79,7 +79,7 @@ FLOW_TOPICS = (*(t for t in topics.RECORDED_TOPICS
                topics.DRIVER_INPUT, topics.REAR_STEER_CMD)
 
 
-class SimulatorNode(Node):
+class SimulatorNode(FourwsNode):
     """Vehicle simulator (see module docstring)."""
 
     #: Parameters that may change while the node runs (validated, cached in ``_cfg``).

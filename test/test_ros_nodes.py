@@ -863,3 +863,35 @@ def test_controller_live_belief_changes_take_effect_or_are_refused(rclpy_context
         assert node.law.vehicle.name == "table_4_4"
     finally:
         node.destroy_node()
+
+
+def test_fourws_nodes_have_no_qos_event_handlers(rclpy_context):
+    """rclpy gives each endpoint default QoS event handlers that the single-threaded executor
+    visits on every wake-up (fourws_ros/node_base.py): a plain Node carries at least one per
+    endpoint created, a FourwsNode none, and handlers asked for are still made (one each)."""
+    from rclpy.event_handler import SubscriptionEventCallbacks
+    from rclpy.node import Node
+
+    from fourws_ros.node_base import FourwsNode
+
+    msg = topics.message_class(topics.SIM_STATUS)
+    qos = topics.TOPIC_QOS[topics.SIM_STATUS]
+    counts = {}
+    for cls in (Node, FourwsNode):
+        node = cls(f"qos_events_{cls.__name__.lower()}", context=rclpy_context)
+        try:
+            before = len(list(node.waitables))
+            node.create_publisher(msg, topics.SIM_STATUS, qos)
+            node.create_subscription(msg, topics.SIM_STATUS, lambda m: None, qos)
+            counts[cls.__name__] = (before, len(list(node.waitables)))
+            if cls is FourwsNode:
+                node.create_subscription(msg, topics.SIM_STATUS, lambda m: None, qos,
+                                         event_callbacks=SubscriptionEventCallbacks(
+                                             message_lost=lambda e: None,
+                                             use_default_callbacks=False))
+                assert len(list(node.waitables)) == 1
+        finally:
+            node.destroy_node()
+    plain_before, plain_after = counts["Node"]
+    assert plain_after - plain_before >= 2
+    assert counts["FourwsNode"] == (0, 0)
