@@ -265,6 +265,13 @@ def _decode(msgtype: str, raws: list[bytes], store: Any) -> dict[str, np.ndarray
     return fixed if fixed is not None else _decode_generic(msgtype, raws, store)
 
 
+#: What the analysis of a run reads of its bag (:func:`resample` and the run description,
+#: whose run and node configurations every load decodes): ``fourws analyze`` decodes these
+#: only. A graph run's scene (``/tf``, the markers) is about two thirds of its decoding time
+#: and no metric reads it.
+ANALYSIS_TOPICS = (TOPIC_STATE, TOPIC_DRIVER, TOPIC_REAR_CMD)
+
+
 def load_bag(path: str | Path, topics: Iterable[str] | None = None, *,
              allow_incomplete: bool = False) -> RunData:
     """Read a rosbag2 bag (directory or ``.mcap`` file) into per-topic arrays.

@@ -109,7 +109,8 @@ class BagAnalysis:
         try:
             self.bar(f"reading {path}")
             try:
-                run_data = bagmod.load_bag(path, allow_incomplete=self.args.allow_incomplete)
+                run_data = bagmod.load_bag(path, bagmod.ANALYSIS_TOPICS,
+                                           allow_incomplete=self.args.allow_incomplete)
                 uniform = bagmod.resample(run_data, self.args.dt)
             except FourwsError as exc:
                 self.failures[path] = one_line(exc)
