@@ -44,6 +44,11 @@ _KEPT_LEVELS = (Log.WARN, Log.ERROR, Log.FATAL)
 #: ever (seen as a run whose recorder was killed ended). The run's outcome is known by
 #: then; the teardown is left to its thread.
 CLOSE_TIMEOUT_S = 10.0
+#: How often the launcher asks the graph for the status topics' publishers while it spins, s.
+#: The run's own are named before the start (fourws_ros.startup) and a publisher not named yet
+#: is looked up when its first message comes (PublisherNames.name); asked on every spin, the
+#: graph queries were a quarter of the launcher's CPU in a lockstep run (a spin per status).
+NAMES_REFRESH_S = 0.1
 #: How long the simulator may take to answer the start request (or report running), s.
 START_TIMEOUT_S = 10.0
 #: The closing thread can hold the interpreter while it is stuck (rclpy's destroy calls keep
@@ -161,6 +166,7 @@ class LauncherNode:
         self.state = state
         self.writers = writers
         self.names = PublisherNames(self.node)
+        self._names_refreshed = -float("inf")  # time.monotonic() of the last refresh
         self.config_pub = self.node.create_publisher(String, topics.RUN_CONFIG,
                                                      topics.LATCHED_QOS)
         self.config_pub.publish(String(data=config_json))
@@ -187,7 +193,11 @@ class LauncherNode:
 
     def spin(self, seconds: float) -> None:
         """Run callbacks for up to ``seconds``."""
-        self.names.refresh(topics.MANEUVER_STATUS, topics.SIM_STATUS, topics.RECORDER_STATUS)
+        now = time.monotonic()
+        if now - self._names_refreshed >= NAMES_REFRESH_S:
+            self._names_refreshed = now
+            self.names.refresh(topics.MANEUVER_STATUS, topics.SIM_STATUS,
+                               topics.RECORDER_STATUS)
         self.executor.spin_once(timeout_sec=seconds)
 
     def _from(self, topic: str, info: Any, role: Role) -> bool:
@@ -282,4 +292,5 @@ class LauncherNode:
 
 
 __all__ = ["ABANDONED", "CLOSED", "CLOSE_BACKSTOP", "CLOSE_BACKSTOP_S", "CLOSE_TIMEOUT_S",
-           "KEEP_PARTICIPANTS", "KEPT", "LauncherNode", "RunState", "START_TIMEOUT_S", "STUCK"]
+           "KEEP_PARTICIPANTS", "KEPT", "LauncherNode", "NAMES_REFRESH_S", "RunState",
+           "START_TIMEOUT_S", "STUCK"]

@@ -153,3 +153,26 @@ def test_a_lost_start_answer_counts_once_the_simulator_says_it_runs(monkeypatch)
     paused.executor.spin_once = lambda timeout_sec: setattr(
         paused.state, "sim", types.SimpleNamespace(running=False, final=False))
     assert launcher_node.LauncherNode.start_simulation(paused) is False  # paused: no start
+
+
+def test_the_launcher_asks_the_graph_for_names_at_most_every_refresh_period(monkeypatch):
+    """The launcher spins once per status message; it refreshes the status publishers' names
+    once per NAMES_REFRESH_S (0.1 s), not per spin: 100 spins 5 ms apart (0.5 s on a fake
+    clock) ask the graph 5 times, each time for the three status topics, and every spin runs
+    the executor."""
+    clock = [1000.0]
+    monkeypatch.setattr(launcher_node.time, "monotonic", lambda: clock[0])
+    refreshed: list[tuple[str, ...]] = []
+    spins: list[float] = []
+    fake = types.SimpleNamespace(
+        names=types.SimpleNamespace(refresh=lambda *t: refreshed.append(t)),
+        executor=types.SimpleNamespace(spin_once=lambda timeout_sec: spins.append(timeout_sec)),
+        _names_refreshed=-float("inf"))
+    for _ in range(100):
+        launcher_node.LauncherNode.spin(fake, 0.05)
+        clock[0] += 0.005
+    assert len(spins) == 100
+    assert len(refreshed) == round(100 * 0.005 / launcher_node.NAMES_REFRESH_S) == 5
+    assert set(refreshed) == {(launcher_node.topics.MANEUVER_STATUS,
+                               launcher_node.topics.SIM_STATUS,
+                               launcher_node.topics.RECORDER_STATUS)}
