@@ -15,7 +15,9 @@ that calls the demo without a ``__main__`` guard would run twice).
 
 Whatever happens to the worker (it cannot start, dies, is killed or stopped with SIGSTOP,
 raises), :meth:`BackgroundAnalysis.finish` returns None and says why in one line: the demo then
-analyses the bags in its own process, so a report is always written or its failure named.
+analyses the bags in its own process, so a report is always written or its failure named. A
+demo that dies (SIGKILL) takes its worker with it (the parent-death signal): nobody waits for
+that report any more.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from fourws_cli import cmd_analyze
-from fourws_ros.oslevel import is_stopped
+from fourws_ros.oslevel import PR_SET_PDEATHSIG, is_stopped, prctl
 from fourws_sim.errors import FourwsError, one_line
 
 #: The worker's niceness increment (``os.nice``).
@@ -44,9 +46,10 @@ GONE_WAIT_S = 5.0
 
 
 def _serve(conn: Any, argv: list[str]) -> None:
-    """The worker: ``add`` and ``finish`` requests on ``conn``, each answered; leaves at
-    ``finish`` or when the demo's end closes ``conn``. ``argv``: ``fourws analyze``'s
-    arguments, its bags the ones expected (only the bags added are analysed)."""
+    """The worker: ``prepare`` and ``add`` requests on ``conn``, then ``finish``, answered
+    ``done`` (the exit code) or ``failed`` (why); it leaves after ``finish`` or when the demo's
+    end closes ``conn``. ``argv``: ``fourws analyze``'s arguments, its bags the ones expected
+    (only the bags added are analysed)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         os.nice(NICENESS)
@@ -59,34 +62,39 @@ def _serve(conn: Any, argv: list[str]) -> None:
         parser = argparse.ArgumentParser()
         cmd_analyze.add_arguments(parser)
         analysis = cmd_analyze.BagAnalysis(parser.parse_args(argv))
-        conn.send(("ready", None))
         while True:
             try:
-                kind, path = conn.recv()
+                kind, value = conn.recv()
             except (EOFError, OSError):
                 return  # the demo ended
             if kind == "prepare":
                 try:
-                    analysis.prepare(json.loads(path))
+                    analysis.prepare(json.loads(value))
                 except Exception:  # noqa: BLE001 - ahead of time only: the bag's says why
                     pass
-                continue
-            if kind == "add":
-                analysis.add(path)
-                conn.send(("added", path))
-                continue
-            try:
-                code = analysis.finish()
-            except Exception as exc:  # noqa: BLE001 - the package's one-line errors
-                code = _one_line_error(exc)
-            sys.stdout.flush()
-            sys.stderr.flush()
-            conn.send(("done", code))
-            return
+            elif kind == "add":
+                analysis.add(value)
+            else:
+                try:
+                    code = analysis.finish()
+                except Exception as exc:  # noqa: BLE001 - the package's one-line errors
+                    code = _one_line_error(exc)
+                sys.stdout.flush()
+                sys.stderr.flush()
+                _answer(conn, "done", code)
+                return
     except SystemExit as exc:  # argparse's refusal, already printed
-        conn.send(("failed", f"its arguments were refused (exit code {exc.code})"))
+        _answer(conn, "failed", f"its arguments were refused (exit code {exc.code})")
     except Exception:  # noqa: BLE001 - the demo analyses in its own process instead
-        conn.send(("failed", traceback.format_exc(limit=-1).strip().splitlines()[-1]))
+        _answer(conn, "failed", traceback.format_exc(limit=-1).strip().splitlines()[-1])
+
+
+def _answer(conn: Any, kind: str, value: Any) -> None:
+    """Answer the demo (nothing if it has gone: nobody waits for the answer)."""
+    try:
+        conn.send((kind, value))
+    except OSError:
+        pass
 
 
 def _one_line_error(exc: Exception) -> int:
@@ -111,7 +119,7 @@ class BackgroundAnalysis:
         try:
             self._proc = subprocess.Popen(
                 [sys.executable, "-m", "fourws_cli.background_analysis",
-                 str(theirs.fileno()), *argv],
+                 str(theirs.fileno()), str(os.getpid()), *argv],
                 stdin=subprocess.DEVNULL, pass_fds=(theirs.fileno(),))
         except OSError as exc:
             self.problem = f"cannot start the report's process: {exc.strerror or exc}"
@@ -194,8 +202,12 @@ class BackgroundAnalysis:
 
 
 def main(argv: list[str]) -> int:
-    """The worker process (``python -m fourws_cli.background_analysis FD ARGS...``)."""
-    _serve(Connection(int(argv[0])), argv[1:])
+    """The worker process (``python -m fourws_cli.background_analysis FD DEMO_PID ARGS...``):
+    exit code 0, or 1 when the demo had already gone."""
+    prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # (set before the check: no gap for a death)
+    if os.getppid() != int(argv[1]):
+        return 1
+    _serve(Connection(int(argv[0])), argv[2:])
     return 0
 
 

@@ -18,7 +18,7 @@ from types import SimpleNamespace
 import pytest
 
 from fourws_cli import cmd_demo
-from fourws_cli.background_analysis import BackgroundAnalysis
+from fourws_cli.background_analysis import NICENESS, BackgroundAnalysis
 from fourws_cli.main import main
 from fourws_sim.params import vehicle_from_mapping
 
@@ -150,3 +150,51 @@ def test_a_script_without_a_main_guard_runs_once(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     assert runs.read_text() == "ran\n"
     assert (tmp_path / "rep" / "metrics.json").is_file()
+
+
+def test_the_report_process_does_not_outlive_a_killed_demo(tmp_path: Path) -> None:
+    """A demo process SIGKILLed while its report process is busy (here: stopped, so it cannot
+    notice the closed socket itself): the report process goes with it (parent-death signal),
+    instead of analysing on for nobody."""
+    script = tmp_path / "demo_like.py"
+    script.write_text(
+        "import os, signal, sys\n"
+        "from fourws_cli.background_analysis import BackgroundAnalysis\n"
+        f"w = BackgroundAnalysis([{str(tmp_path / 'a')!r}, '--quiet'])\n"
+        "print(w._proc.pid, flush=True)\n"
+        "sys.stdin.readline()\n"
+        "os.kill(os.getpid(), signal.SIGKILL)\n")
+    demo = subprocess.Popen([sys.executable, str(script)], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+    worker = int(demo.stdout.readline())
+    deadline = time.monotonic() + 120  # (a bound on a hang, not a speed)
+    while _nice(worker) != NICENESS and time.monotonic() < deadline:
+        time.sleep(0.02)  # the worker is niced after it set its parent-death signal
+    os.kill(worker, signal.SIGSTOP)
+    try:
+        demo.stdin.write("\n")
+        demo.stdin.flush()
+        assert demo.wait(timeout=60) == -signal.SIGKILL
+        deadline = time.monotonic() + 60  # (a bound on a hang, not a speed)
+        while _alive(worker) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(worker)
+    finally:
+        if _alive(worker):
+            os.kill(worker, signal.SIGKILL)
+
+
+def _nice(pid: int) -> int | None:
+    """The niceness of ``pid`` (/proc/PID/stat field 19), None if it has gone."""
+    try:
+        return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[16])
+    except OSError:
+        return None
+
+
+def _alive(pid: int) -> bool:
+    """``pid`` runs (a zombie, reaped by nobody here, has gone)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
