@@ -161,7 +161,8 @@ def test_the_launcher_asks_the_graph_for_names_at_most_every_refresh_period(monk
     clock) ask the graph 5 times, each time for the three status topics, and every spin runs
     the executor."""
     clock = [1000.0]
-    monkeypatch.setattr(launcher_node.time, "monotonic", lambda: clock[0])
+    # the launcher module's clock only (time.monotonic itself serves every thread here)
+    monkeypatch.setattr(launcher_node, "time", types.SimpleNamespace(monotonic=lambda: clock[0]))
     refreshed: list[tuple[str, ...]] = []
     spins: list[float] = []
     fake = types.SimpleNamespace(
