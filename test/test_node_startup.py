@@ -45,10 +45,20 @@ def _mapped(pid: int, library: str) -> bool:
         return False
 
 
+#: Runs ``argv[1:]`` in its own place with SIGINT and SIGTERM at their defaults: a test session
+#: started where SIGINT is ignored (a background job of a non-interactive shell, ``nohup``)
+#: would hand that on, and a node keeps an ignored signal ignored (as it should).
+_DEFAULT_SIGNALS = ("import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+                    "signal.signal(signal.SIGTERM, signal.SIG_DFL); "
+                    "os.execv(sys.argv[1], sys.argv[1:])")
+
+
 def _stop_at(command: list[str], library: str) -> tuple[int, str, bool]:
-    """Start ``command``, send SIGINT once ``library`` is mapped in it; returns the exit code,
-    stderr, and whether the signal was sent before the process ended by itself."""
-    proc = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+    """Start ``command`` (with SIGINT and SIGTERM at their defaults), send SIGINT once
+    ``library`` is mapped in it; returns the exit code, stderr, and whether the signal was sent
+    before the process ended by itself."""
+    proc = subprocess.Popen([sys.executable, "-c", _DEFAULT_SIGNALS, *command],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, errors="replace", env=dict(os.environ))
     sent = False
     try:
