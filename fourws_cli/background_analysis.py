@@ -112,7 +112,6 @@ class BackgroundAnalysis:
         """Start the worker for ``fourws analyze`` ``argv``: its bags are the ones expected,
         but only those given to :meth:`add` are analysed (a run that failed has none)."""
         self.problem = ""
-        self.added: list[str] = []
         ours, theirs = socket.socketpair()
         self._conn = Connection(ours.detach())
         self._proc: subprocess.Popen[bytes] | None = None
@@ -133,8 +132,7 @@ class BackgroundAnalysis:
 
     def add(self, path: str) -> None:
         """Have the worker analyse the bag ``path`` (queued; nothing waits for it here)."""
-        if self._request("add", path):
-            self.added.append(path)
+        self._request("add", path)
 
     def _request(self, kind: str, value: str) -> bool:
         """Send a request (False: the worker cannot take it, ``problem`` says why)."""

@@ -8,11 +8,12 @@ Without ``--report`` or ``--json`` it prints, per run, every metric of its maneu
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
 import time
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping
 
 from fourws_sim.errors import FourwsError, ParameterError, one_line
 
@@ -89,24 +90,29 @@ class BagAnalysis:
         self.failures: dict[str, str] = {}
         self.busy_s = 0.0  # the time spent analysing (a demo's runs go on between bags)
 
+    @contextlib.contextmanager
+    def _busy(self) -> Iterator[None]:
+        """Count the time inside towards :attr:`busy_s`."""
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.busy_s += time.perf_counter() - start
+
     def prepare(self, config: Mapping[str, Any]) -> None:
         """Compute ahead what every bag of a run of ``config`` (its ``/fourws/run_config``)
         shares with the runs of its car and law (:func:`fourws_analysis.compare.prepare`)."""
         from fourws_analysis import compare  # scipy, control: not for --help
 
-        start = time.perf_counter()
-        try:
+        with self._busy():
             compare.prepare(config, eig_sweep=not self.args.no_sweep)
-        finally:
-            self.busy_s += time.perf_counter() - start
 
     def add(self, path: str) -> None:
         """Read, resample and analyse one bag (a bag that cannot be read is a failure)."""
         from fourws_analysis import bag as bagmod  # scipy, control: not for --help
         from fourws_analysis.compare import analyze_run  # scipy, control: not for --help
 
-        start = time.perf_counter()
-        try:
+        with self._busy():
             self.bar(f"reading {path}")
             try:
                 run_data = bagmod.load_bag(path, bagmod.ANALYSIS_TOPICS,
@@ -124,20 +130,17 @@ class BagAnalysis:
                                 if run_data.complete is None else
                                 "INCOMPLETE: " + "; ".join(run_data.problems))
             self.analyses.append(result)
-        finally:
-            self.busy_s += time.perf_counter() - start
 
     def finish(self) -> int:
         """Write the report, print the results; the command's exit code."""
         from fourws_analysis.report import write_report  # scipy, control: not for --help
 
         args, analyses, failures = self.args, self.analyses, self.failures
-        start = time.perf_counter()
         index = None
-        if args.report:
-            index = write_report(analyses, args.report, failures, progress=self.bar)
-        self.bar.close()
-        self.busy_s += time.perf_counter() - start
+        with self._busy():
+            if args.report:
+                index = write_report(analyses, args.report, failures, progress=self.bar)
+            self.bar.close()
         for path, why in failures.items() if analyses else ():
             # (with no bag analysed the command's one error line below names every reason)
             print(f"fourws analyze: error: {why}", file=sys.stderr)
