@@ -136,9 +136,11 @@ def test_rogue_driver_inputs_on_the_runs_grid_never_reach_the_law(tmp_path, user
     answered -- never a plausible other result."""
     sc = _scenario(40.0)
     rogue = _start_rogue("driver_grid", 120.0)
+    refused = "not from the run's node (publisher rogue)"
     try:
         run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
-                                  run_name="rogue_driver")
+                                  run_name="rogue_driver",
+                                  on_running=_hold_maneuver_until_logged(refused))
     finally:
         os.killpg(rogue.pid, signal.SIGTERM)
         rogue_out = _stop(rogue)
@@ -152,7 +154,34 @@ def test_rogue_driver_inputs_on_the_runs_grid_never_reach_the_law(tmp_path, user
     np.testing.assert_array_equal(state.fields["yaw_rate_radps"][:n], ref["yaw_rate_radps"])
     np.testing.assert_array_equal(cmd.fields["angle_rad"], ref.rear_angle_rad)
     log = (run.run_dir / "logs" / "fourws_controller.log").read_text()
-    assert "not from the run's node (publisher rogue)" in log, log[-2000:]
+    assert refused in log, log[-2000:]
+
+
+#: How long :func:`_hold_maneuver_until_logged` holds the maneuver node at most, s: well
+#: inside the 20 s participant lease of Fast DDS, after which the stopped node would count as
+#: gone
+HOLD_BOUND_S = 12.0
+
+
+def _hold_maneuver_until_logged(text: str):
+    """An ``on_running`` hook: stop the maneuver node (SIGSTOP) until the controller's log
+    says ``text`` or :data:`HOLD_BOUND_S` passed, then let it go on. A lockstep run waits
+    meanwhile for the maneuver's driver input, so the attack meets the run however late the
+    controller discovers the rogue's publisher and learns its name (on a loaded CI machine
+    that once took longer than the whole 40 s run, about 4 s of wall time, and the controller
+    never logged the refusal). Held, the controller is offered only the rogue's inputs for the
+    state it waits on: the sharpest form of the attack."""
+    def hold(group) -> None:
+        maneuver = group.child("fourws_maneuver").proc
+        log = group.child("fourws_controller").log_path
+        os.kill(maneuver.pid, signal.SIGSTOP)
+        try:
+            deadline = time.monotonic() + HOLD_BOUND_S
+            while time.monotonic() < deadline and text not in log.read_text(errors="replace"):
+                time.sleep(0.1)
+        finally:
+            os.kill(maneuver.pid, signal.SIGCONT)
+    return hold
 
 
 def test_a_second_answering_publisher_fails_the_run_loudly(tmp_path, user_domain):
@@ -173,8 +202,16 @@ def test_a_second_answering_publisher_fails_the_run_loudly(tmp_path, user_domain
     assert "second publisher" in run.reason
 
 
-def _fault(node: str, sig: signal.Signals):
+def _fault(node: str, sig: signal.Signals, monkeypatch=None, stall_s: float = 0.0):
+    """An ``on_running`` hook: ``sig`` to ``node`` 0.1 s after the simulation began to move;
+    with ``stall_s``, the launcher's stall timeout becomes that from then on. Not from the
+    start: until its first step the simulator waits for its publishers to match their
+    subscribers, which on a loaded machine can take longer than a short stall timeout (seen
+    in CI: "simulation stalled at t = 0.00 s ... waiting for 0 of 1 subscribers of
+    /robot_description", before any fault was injected)."""
     def inject(group) -> None:
+        if stall_s:
+            monkeypatch.setattr(graph_run, "STALL_TIMEOUT_S", stall_s)
         time.sleep(0.1)
         os.kill(group.child(node).proc.pid, sig)
     return inject
@@ -194,10 +231,9 @@ def test_killed_or_stopped_node_fails_the_run_naming_it(tmp_path, monkeypatch, n
     """SIGKILL or SIGSTOP of a node mid-run: the run fails with a reason naming that node, no
     process outlives the run, the record is written, and the bag is readable (a killed
     recorder's after `repair`)."""
-    monkeypatch.setattr(graph_run, "STALL_TIMEOUT_S", 3.0)
     sc = _scenario(60.0)
     run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path, run_name="f",
-                              on_running=_fault(node, sig))
+                              on_running=_fault(node, sig, monkeypatch, stall_s=3.0))
     assert run.outcome == Outcome.FAILED
     assert expected in run.reason, run.reason
     assert all(code is not None for code in run.exit_codes.values()), run.exit_codes
