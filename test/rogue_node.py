@@ -15,6 +15,11 @@ Run as ``python rogue_node.py KIND SECONDS`` on the run's ROS domain; ``KIND``:
 * ``clock`` -- copies of the run's states, one step ahead of each (on the run's clock);
 * ``driver_grid`` -- 100 rad driver inputs stamped on the run's control grid (every 10 ms of
   the first 60 s, cycling), so some carry the stamp of a state the run is answering.
+
+Once every publisher of its kind has matched every subscriber of its topic that the graph
+shows from the run's nodes (at least one), and a rogue that answers states has had one, it
+prints ``rogue met the run``: the fault tests hold the run (its maneuver node stopped) until
+then, so the attack meets the run however long discovery takes on a loaded machine.
 """
 
 from __future__ import annotations
@@ -40,9 +45,28 @@ def main(kind: str, seconds: float) -> int:
     sent = 0
     print("rogue ready", flush=True)
     end = time.monotonic() + seconds
+    used = {"mimic": (topics.DRIVER_INPUT, topics.REAR_STEER_CMD),
+            "done": (topics.MANEUVER_STATUS,), "clock": (topics.STATE,),
+            "driver_grid": (topics.DRIVER_INPUT,)}.get(kind, tuple(pubs))
+    answers = kind in ("mimic", "done", "clock")
+    heard = [False]  # a state of the run reached the rogue (kinds that answer states)
+    met = [False]
+
+    def check_met() -> None:
+        """Print ``rogue met the run`` once (module docstring)."""
+        if met[0] or (answers and not heard[0]):
+            return
+        for topic in used:
+            run_subs = [i for i in node.get_subscriptions_info_by_topic(topic)
+                        if i.node_name.startswith("fourws")]
+            if not run_subs or pubs[topic].get_subscription_count() < len(run_subs):
+                return
+        met[0] = True
+        print("rogue met the run", flush=True)
     if kind == "mimic":
         def answer(state) -> None:
             nonlocal sent
+            heard[0] = True
             pubs[topics.DRIVER_INPUT].publish(
                 conversions.driver_msg(DriverCommand(0.5, 0.03), state.sim_time_s))
             cmd = msg(topics.REAR_STEER_CMD)()
@@ -57,6 +81,7 @@ def main(kind: str, seconds: float) -> int:
     elif kind == "done":
         def finish(state) -> None:
             nonlocal sent
+            heard[0] = True
             if state.step >= 200 * 10:
                 status = msg(topics.MANEUVER_STATUS)()
                 status.header.stamp = state.header.stamp
@@ -73,6 +98,7 @@ def main(kind: str, seconds: float) -> int:
 
         def ahead(state) -> None:
             nonlocal sent
+            heard[0] = True
             if state.step in own:
                 return  # its own copy
             state.step += 10
@@ -89,12 +115,15 @@ def main(kind: str, seconds: float) -> int:
             pubs[topics.DRIVER_INPUT].publish(
                 conversions.driver_msg(DriverCommand(1600.0, 100.0), 0.01 * (k % 6000)))
             sent += 1
+            if k % 200 == 0:
+                check_met()
             time.sleep(0.0005)
     if kind in ("mimic", "done", "clock"):
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         while time.monotonic() < end:
             executor.spin_once(timeout_sec=0.05)
+            check_met()
     elif kind != "driver_grid":
         k = 0
         while time.monotonic() < end:
@@ -125,6 +154,8 @@ def main(kind: str, seconds: float) -> int:
             final.end_reason = "maneuver completed"
             pubs[topics.SIM_STATUS].publish(final)
             sent += 5
+            if k % 50 == 0:
+                check_met()
             time.sleep(0.002)
     print(f"rogue {kind}: sent {sent} messages", flush=True)
     node.destroy_node()

@@ -16,8 +16,10 @@ import selectors
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import pytest
@@ -63,7 +65,29 @@ def user_domain(monkeypatch):
     return domain
 
 
-def _start_rogue(kind: str, seconds: float) -> subprocess.Popen:
+class _Rogue:
+    """A running ``rogue_node.py`` and what it printed (read as it comes, so a test can wait
+    for its ``rogue met the run``)."""
+
+    def __init__(self, proc: subprocess.Popen) -> None:
+        self.proc = proc
+        self.pid = proc.pid
+        self._lines: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.proc.stdout:
+            self._lines.append(line)
+
+    def said(self, text: str) -> bool:
+        return any(text in line for line in list(self._lines))
+
+    def output(self) -> str:
+        return "".join(self._lines)
+
+
+def _start_rogue(kind: str, seconds: float) -> _Rogue:
     proc = subprocess.Popen([sys.executable, str(ROGUE), kind, str(seconds)],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             start_new_session=True)
@@ -76,16 +100,49 @@ def _start_rogue(kind: str, seconds: float) -> subprocess.Popen:
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
     assert "rogue ready" in line, f"the rogue node did not start within 120 s: {line!r}"
-    return proc
+    return _Rogue(proc)
 
 
-def _stop(proc: subprocess.Popen) -> str:
+def _stop(rogue: _Rogue) -> str:
+    """Stop the rogue (SIGTERM to its group); what it printed."""
+    os.killpg(rogue.pid, signal.SIGTERM)
     try:
-        out, _ = proc.communicate(timeout=60)
+        rogue.proc.wait(timeout=60)
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-    return out
+        if rogue.proc.poll() is None:
+            os.killpg(rogue.pid, signal.SIGKILL)
+            rogue.proc.wait()
+    rogue._reader.join(timeout=10)
+    return rogue.output()
+
+
+#: How long :func:`_hold_maneuver_until` holds the maneuver node at most, s: well inside the
+#: 20 s participant lease of Fast DDS, after which the stopped node would count as gone
+HOLD_BOUND_S = 12.0
+
+
+def _hold_maneuver_until(met: Callable[[], bool]):
+    """An ``on_running`` hook: stop the maneuver node (SIGSTOP) until ``met()`` or
+    :data:`HOLD_BOUND_S` passed, then let it go on. A lockstep run waits meanwhile for the
+    maneuver's driver input, so a rogue's attack meets the run however late discovery joins
+    them: a run of 40 s of simulation takes about 4 s of wall time, and on a loaded CI machine
+    the controller once had not learnt the rogue's name by the end of it (the attack then
+    never happened and the test failed). Held, the run's nodes are offered the rogue's
+    messages while they wait on one state: the sharpest form of the attack."""
+    def hold(group) -> None:
+        maneuver = group.child("fourws_maneuver").proc
+        os.kill(maneuver.pid, signal.SIGSTOP)
+        try:
+            deadline = time.monotonic() + HOLD_BOUND_S
+            while time.monotonic() < deadline and not met():
+                time.sleep(0.1)
+        finally:
+            os.kill(maneuver.pid, signal.SIGCONT)
+    return hold
+
+
+def _rogue_met(rogue: _Rogue) -> Callable[[], bool]:
+    return lambda: rogue.said("rogue met the run")
 
 
 def test_rogue_garbage_is_refused_counted_and_the_run_is_exact(tmp_path, user_domain):
@@ -100,10 +157,11 @@ def test_rogue_garbage_is_refused_counted_and_the_run_is_exact(tmp_path, user_do
     rogue = _start_rogue("garbage", 120.0)
     try:
         run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
-                                  run_name="rogue")
+                                  run_name="rogue", on_running=_hold_maneuver_until(
+                                      _rogue_met(rogue)))
     finally:
-        os.killpg(rogue.pid, signal.SIGTERM)
-        _stop(rogue)
+        rogue_out = _stop(rogue)
+    assert "rogue met the run" in rogue_out, rogue_out
     assert run.ok, run.reason
     assert run.complete
     _assert_equals_twin(run.bag_path, sc, "sol1")
@@ -140,11 +198,11 @@ def test_rogue_driver_inputs_on_the_runs_grid_never_reach_the_law(tmp_path, user
     try:
         run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
                                   run_name="rogue_driver",
-                                  on_running=_hold_maneuver_until_logged(refused))
+                                  on_running=_hold_maneuver_until(lambda: refused in (
+                                      tmp_path / "rogue_driver" / "logs"
+                                      / "fourws_controller.log").read_text(errors="replace")))
     finally:
-        os.killpg(rogue.pid, signal.SIGTERM)
-        rogue_out = _stop(rogue)
-    assert "sent 0 messages" not in rogue_out, rogue_out
+        _stop(rogue)
     assert run.ok or run.reason.startswith("a second publisher answered"), run.reason
     ref = run_scenario(sc, "sol1")
     bag = load_bag(run.bag_path)
@@ -157,33 +215,6 @@ def test_rogue_driver_inputs_on_the_runs_grid_never_reach_the_law(tmp_path, user
     assert refused in log, log[-2000:]
 
 
-#: How long :func:`_hold_maneuver_until_logged` holds the maneuver node at most, s: well
-#: inside the 20 s participant lease of Fast DDS, after which the stopped node would count as
-#: gone
-HOLD_BOUND_S = 12.0
-
-
-def _hold_maneuver_until_logged(text: str):
-    """An ``on_running`` hook: stop the maneuver node (SIGSTOP) until the controller's log
-    says ``text`` or :data:`HOLD_BOUND_S` passed, then let it go on. A lockstep run waits
-    meanwhile for the maneuver's driver input, so the attack meets the run however late the
-    controller discovers the rogue's publisher and learns its name (on a loaded CI machine
-    that once took longer than the whole 40 s run, about 4 s of wall time, and the controller
-    never logged the refusal). Held, the controller is offered only the rogue's inputs for the
-    state it waits on: the sharpest form of the attack."""
-    def hold(group) -> None:
-        maneuver = group.child("fourws_maneuver").proc
-        log = group.child("fourws_controller").log_path
-        os.kill(maneuver.pid, signal.SIGSTOP)
-        try:
-            deadline = time.monotonic() + HOLD_BOUND_S
-            while time.monotonic() < deadline and text not in log.read_text(errors="replace"):
-                time.sleep(0.1)
-        finally:
-            os.kill(maneuver.pid, signal.SIGCONT)
-    return hold
-
-
 def test_a_second_answering_publisher_fails_the_run_loudly(tmp_path, user_domain):
     """A foreign node that answers every state with a plausible driver input and command: the
     run cannot tell whose answer came first, so it must not pass as ok; the reason names the
@@ -194,10 +225,11 @@ def test_a_second_answering_publisher_fails_the_run_loudly(tmp_path, user_domain
     rogue = _start_rogue("mimic", 120.0)
     try:
         run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
-                                  run_name="mimic")
+                                  run_name="mimic", on_running=_hold_maneuver_until(
+                                      _rogue_met(rogue)))
     finally:
-        os.killpg(rogue.pid, signal.SIGTERM)
         rogue_out = _stop(rogue)
+    assert "rogue met the run" in rogue_out, rogue_out
     assert run.outcome == Outcome.FAILED, rogue_out
     assert "second publisher" in run.reason
 
@@ -364,11 +396,11 @@ def test_foreign_messages_on_the_runs_clock_never_pass_as_ok(tmp_path, user_doma
     rogue = _start_rogue(kind, 120.0)
     try:
         run = graph_run.run_graph(RunConfig.from_scenario(sc, "sol1"), tmp_path,
-                                  run_name=kind)
+                                  run_name=kind, on_running=_hold_maneuver_until(
+                                      _rogue_met(rogue)))
     finally:
-        os.killpg(rogue.pid, signal.SIGTERM)
         rogue_out = _stop(rogue)
-    assert "sent 0 messages" not in rogue_out, rogue_out  # the rogue did meet the run
+    assert "rogue met the run" in rogue_out, rogue_out
     if run.ok:
         assert run.complete and run.sim_time_s == pytest.approx(40.0)
         _assert_equals_twin(run.bag_path, sc, "sol1")
