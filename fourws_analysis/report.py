@@ -25,6 +25,7 @@ import numpy as np
 
 from fourws_analysis import units
 from fourws_analysis.compare import RunAnalysis
+from fourws_analysis.figure_jobs import Job, draw_all
 from fourws_analysis.report_figures import (EIG_PLOT_MIN_REAL, plot_bode, plot_eigenvalues,
                                             plot_steady_state, plot_step, plot_time_histories)
 from fourws_analysis.report_standards import (law_verdicts, plot_free_steer,
@@ -35,6 +36,8 @@ from fourws_analysis.report_texts import (MODEL_NAMES, car_notes, identification
                                           run_step_title, spike_notes, stability_notes)
 
 Progress = Callable[[str], None]
+#: The order figures start drawing in (lower first; the rest after): the longest first.
+_DRAW_ORDER = {plot_eigenvalues: 0, plot_time_histories: 1}
 
 
 def _fmt(value: Any, digits: int = 4) -> str:
@@ -236,7 +239,7 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
     tick = progress or (lambda _msg: None)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    sections: list[tuple[str, Path | None, str, list[str]]] = []
+    sections: list[tuple[str, Any, str, list[str]]] = []  # (title, job index, caption, items)
     figures = (("Frequency response", plot_bode, "bode.png",
                 "Measured H1 estimate (solid) over the analytic 2-DOF/3-DOF models closed "
                 "with the run's law and the 8-DOF linearized at the run's straight-running "
@@ -245,10 +248,16 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
                (run_step_title(runs), plot_step, "step.png", ""),
                ("ISO 4138 steady-state handling", plot_steady_state, "steady_state.png", ""))
 
+    jobs: list[Job] = []
+
     def draw(fn: Callable[[Sequence[RunAnalysis], Path], Path | None],
-             members: Sequence[RunAnalysis], fname: str) -> Path | None:
-        tick(f"plot {fname}")
-        return fn(members, out / fname) if plots else None
+             members: Sequence[RunAnalysis], fname: str) -> int | None:
+        """A figure to draw (below, side by side): its job's index (None without plots)."""
+        if not plots:
+            tick(f"plot {fname}")
+            return None
+        jobs.append((fn, members, out / fname))
+        return len(jobs) - 1
 
     if runs:
         # time histories: one figure per maneuver, so a 60 s sweep does not flatten a 5 s step
@@ -282,6 +291,12 @@ def write_report(runs: Sequence[RunAnalysis], out_dir: str | Path,
         sections.append(("ISO 17288 free steer", draw(plot_free_steer, runs, "free_steer.png"),
                          "Yaw rate and steering-wheel angle from the release of the steering "
                          "wheel (steering release) or the end of the torque pulse.", []))
+    # the longest first (the eigenvalue panels, then the time histories): side by side, the
+    # figures take about as long as the longest
+    first = sorted(range(len(jobs)), key=lambda k: _DRAW_ORDER.get(jobs[k][0], 2))
+    drawn = draw_all(jobs, started=lambda k: tick(f"plot {jobs[k][2].name}"), order=first)
+    sections = [(title, None if job is None else drawn[job], caption, items)
+                for title, job, caption, items in sections]
     metrics = {"runs": {r.name: r.metrics() for r in runs}, "failed_bags": dict(failures or {})}
     if law_verdicts(runs):
         metrics["fmvss126_law_verdicts"] = [v.to_dict() for v in law_verdicts(runs)]
