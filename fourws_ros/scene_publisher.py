@@ -6,13 +6,14 @@ and ``/fourws/markers``.
 What is drawn is :class:`fourws_run.scene.CarScene`'s (no ROS there), written as CDR bytes by
 :mod:`fourws_run.scene_codecs`; this class owns the publishers (counted, like every
 publication of the simulator, so the recorder's accounting and the lockstep flow window cover
-them) and is called from the simulator's ``publish_tick``, the one place a state's publications
-go. The URDF and the fixed transforms are published once, latched.
+them) and is called from the simulator's ``side_publications``, the one place a state's
+publications besides the state itself are made. The URDF and the fixed transforms are
+published once, latched.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 from fourws_ros import topics
 from fourws_ros.reporting import PublishCounts
@@ -72,19 +73,27 @@ class ScenePublisher:
         self.scene.trail = PathTrail()
         self._next_path_s = 0.0
 
-    def publish(self, tick: Tick, markers_due: bool) -> None:
-        """The transforms of ``tick``; its markers when due (``markers_due``: with the
-        odometry; the path and course every :attr:`path_period_s`)."""
+    def publications(self, tick: Tick, markers_due: bool) -> list[Callable[[], None]]:
+        """What ``tick`` publishes of the scene, in order: its transforms (and its markers
+        when due, ``markers_due``: with the odometry), then the path and course when due
+        (every :attr:`path_period_s`), two calls a clock may make on different integration
+        steps."""
         self.publish_latched()
         outputs = tick.outputs
-        self._tf.publish(self._tf_encoder.encode(tick.stamp_ns, self.scene.transforms(outputs)))
-        if markers_due:
-            self._markers.publish(self._fast.encode(tick.stamp_ns,
-                                                    self.scene.fast_values(outputs)))
+
+        def frames() -> None:
+            self._tf.publish(self._tf_encoder.encode(tick.stamp_ns,
+                                                     self.scene.transforms(outputs)))
+            if markers_due:
+                self._markers.publish(self._fast.encode(tick.stamp_ns,
+                                                        self.scene.fast_values(outputs)))
+
+        jobs = [frames]
         if tick.t >= self._next_path_s - 1e-12:
-            self._markers.publish(self._slow.encode(tick.stamp_ns,
-                                                    self.scene.slow_values(outputs)))
             self._next_path_s = tick.t + self.path_period_s
+            jobs.append(lambda: self._markers.publish(
+                self._slow.encode(tick.stamp_ns, self.scene.slow_values(outputs))))
+        return jobs
 
 
 __all__ = ["ScenePublisher"]

@@ -46,7 +46,7 @@ import json
 import math
 import sys
 import time
-from typing import Any
+from typing import Any, Callable
 
 from rcl_interfaces.msg import SetParametersResult
 from std_srvs.srv import SetBool, Trigger
@@ -237,10 +237,9 @@ class SimulatorNode(FourwsNode):
         return SetParametersResult(successful=True)
 
     # ------------------------------------------------------------------ the sink of the clock
-    def publish_tick(self, tick: Tick) -> bool:
-        """Publish ``tick``: state (first: the answers' critical path starts there), clock,
-        then the scene's transforms, odometry/IMU/markers and status when due; at
-        ``end_time_s`` end the run after this state."""
+    def publish_state(self, tick: Tick) -> bool:
+        """Publish the state of ``tick`` (first: the answers' critical path starts there),
+        then the clock (cheap: one time stamp)."""
         try:
             raw = self._state_encoder.encode(tick.outputs, tick.t, tick.step)
         except conversions.NonFiniteError as exc:
@@ -248,21 +247,35 @@ class SimulatorNode(FourwsNode):
             return False
         self.state_pub.publish(raw)
         self.clock_pub.publish(codecs.encode_clock(tick.t))
-        t = tick.t
-        viz_due = t >= self._next_viz_s - 1e-12
-        if self.scene is not None:
-            self.scene.publish(tick, viz_due)
-        if viz_due:
-            self.odom_pub.publish(self._odom_encoder.encode(tick.outputs, tick.stamp_ns))
-            self.imu_pub.publish(self._imu_encoder.encode(tick.outputs, tick.stamp_ns))
-            self._next_viz_s = t + self._cfg["viz_period_s"]
-        if t >= self._next_status_s - 1e-12:
-            self._publish_status(t)
-            self._next_status_s = t + self._cfg["status_period_s"]
-        if self._end_s > 0.0 and t >= self._end_s - 1e-12:
-            self.end(f"end time {self._end_s:g} s reached", False)
-            return False
         return True
+
+    def side_publications(self, tick: Tick) -> list[Callable[[], bool]]:
+        """The rest of ``tick``'s publications, in order: the scene's transforms (and
+        markers when due), its path and course when due, odometry and IMU and the status when
+        due; at ``end_time_s`` the end of
+        the run after this state (the clock calls them now, or realtime one per integration
+        step, :class:`fourws_run.clock_modes.RealtimeClock`: at most four of them, so at the
+        default 5 ms state period each has a step of its own)."""
+        t = tick.t
+        jobs: list[Callable[[], bool]] = []
+        viz_due = t >= self._next_viz_s - 1e-12
+        if viz_due:
+            self._next_viz_s = t + self._cfg["viz_period_s"]
+        if self.scene is not None:
+            jobs += [lambda publish=publish: publish() or True
+                     for publish in self.scene.publications(tick, viz_due)]
+        if viz_due:
+            def odometry() -> bool:
+                self.odom_pub.publish(self._odom_encoder.encode(tick.outputs, tick.stamp_ns))
+                self.imu_pub.publish(self._imu_encoder.encode(tick.outputs, tick.stamp_ns))
+                return True
+            jobs.append(odometry)
+        if t >= self._next_status_s - 1e-12:
+            self._next_status_s = t + self._cfg["status_period_s"]
+            jobs.append(lambda: self._publish_status(t) or True)
+        if self._end_s > 0.0 and t >= self._end_s - 1e-12:
+            jobs.append(lambda: self.end(f"end time {self._end_s:g} s reached", False) or False)
+        return jobs
 
     def _maneuver(self) -> Any:
         """The run's maneuver (``maneuver_json``), for the scene's course; None without."""

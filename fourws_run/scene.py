@@ -5,7 +5,7 @@
 :class:`CarScene` turns a state's outputs (``Simulator.outputs()``, the ``VehicleState``
 fields) into the transforms of ``/tf`` and the markers of ``/fourws/markers``; the encoders of
 :mod:`fourws_run.scene_codecs` write them as CDR bytes, the simulator node publishes them
-(:mod:`fourws_ros.simulator_node`, ``publish_tick``). Frames and their meaning:
+(:mod:`fourws_ros.simulator_node`, ``side_publications``). Frames and their meaning:
 :mod:`fourws_run.urdf` (module docstring) and :data:`fourws_run.interface.FRAMES`.
 
 Transforms (each ``(tx, ty, tz, qx, qy, qz, qw)``, m and a unit quaternion), in

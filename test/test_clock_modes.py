@@ -24,9 +24,12 @@ class Sink:
         self.waits = []
         self.ended: tuple[str, bool] | None = None
 
-    def publish_tick(self, tick) -> bool:
+    def publish_state(self, tick) -> bool:
         self.ticks.append(tick)
         return True
+
+    def side_publications(self, tick) -> list:
+        return []
 
     def report_wait(self, t: float) -> None:
         self.waits.append(t)
@@ -155,6 +158,94 @@ def test_realtime_starts_its_wall_clock_only_on_the_first_answers():
     reason, failed = sink.ended
     assert failed and "no driver input for the first state" in reason
     assert engine.sim.step_count == 0
+
+
+class SpreadSink(Sink):
+    """Each state has ``n_side`` side publications; the log says in which order states and
+    side publications went out and at which integration step; side publication ``stop_at``
+    (a (step, index) pair) ends the run as an end time does."""
+
+    def __init__(self, engine, n_side: int, stop_at=None) -> None:
+        super().__init__()
+        self.engine, self.n_side, self.stop_at = engine, n_side, stop_at
+        self.log: list[tuple] = []
+
+    def publish_state(self, tick) -> bool:
+        self.log.append(("state", tick.step, self.engine.sim.step_count))
+        return super().publish_state(tick)
+
+    def side_publications(self, tick) -> list:
+        def side(j: int):
+            def publish() -> bool:
+                self.log.append(("side", tick.step, j, self.engine.sim.step_count))
+                if (tick.step, j) == self.stop_at:
+                    self.end("end time reached", False)
+                    return False
+                return True
+            return publish
+        return [side(j) for j in range(self.n_side)]
+
+
+def _realtime_run(sink_of, ticks: int):
+    """A realtime clock run until ``ticks`` states went out (or its sink ended it)."""
+    engine = _engine()
+    sink = sink_of(engine)
+    clock = RealtimeClock(engine, sink, InputLimits(0.1, 1e5), state_steps=5,
+                          stale_after_s=lambda: 0.1, driver_timeout_s=lambda: 10.0)
+    clock.resume()
+    t0 = sink.ticks[0]
+    clock.offer_driver(t0.stamp_ns, DriverCommand(0.0, 0.01))
+    clock.offer_command(t0.step, t0.stamp_ns, 0.0)
+    deadline = time.monotonic() + 30.0
+    while len(sink.ticks) < ticks and sink.ended is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    clock.pause()
+    return sink
+
+
+def test_realtime_spreads_a_states_side_publications_over_the_next_steps():
+    """Realtime: the first state goes out whole; after that each state's side publications
+    go out one per integration step after it (3 of them: steps +1, +2, +3), in order, all
+    before the next state -- and none is left behind when the clock stops."""
+    sink = _realtime_run(lambda engine: SpreadSink(engine, 3), ticks=6)
+    states = [e for e in sink.log if e[0] == "state"]
+    assert len(states) >= 6
+    expected = []
+    for _, step, at in states:
+        expected.append(("state", step, at))
+        first = 0 if step == 0 else 1  # the first state's go out with it
+        expected += [("side", step, j, at + (first and j + 1)) for j in range(3)]
+    # the last state's: those the stop came before went out as the thread ended
+    last = states[-1]
+    n = len(sink.log) - 3
+    assert sink.log[:n] == expected[:n]
+    tail = sink.log[n:]
+    assert [e[:3] for e in tail] == [("side", last[1], j) for j in range(3)]
+    assert [e[3] for e in tail] == sorted(e[3] for e in tail)
+    assert all(last[2] <= e[3] <= x[3] for e, x in zip(tail, expected[n:]))
+
+
+def test_realtime_publishes_what_a_state_could_not_spread_before_the_next():
+    """Seven side publications and four integration steps to the next state: four go out
+    one per step, the other three just before the next state, in order."""
+    sink = _realtime_run(lambda engine: SpreadSink(engine, 7), ticks=4)
+    states = [e for e in sink.log if e[0] == "state"]
+    assert len(states) >= 4
+    _, step, at = states[1]
+    sides = [e for e in sink.log if e[0] == "side" and e[1] == step]
+    assert [e[2] for e in sides] == list(range(7))
+    assert [e[3] for e in sides] == [at + 1, at + 2, at + 3, at + 4, at + 5, at + 5, at + 5]
+    nxt = sink.log.index(states[2])
+    assert sink.log.index(sides[-1]) == nxt - 1
+
+
+def test_realtime_side_publication_that_ends_the_run_is_the_last():
+    """A side publication that ends the run (an end time): nothing is integrated or published
+    after it, not even the rest of that state's side publications."""
+    sink = _realtime_run(lambda engine: SpreadSink(engine, 3, stop_at=(10, 1)), ticks=100)
+    assert sink.ended == ("end time reached", False)
+    assert sink.log[-1] == ("side", 10, 1, 12)
+    assert [e[1] for e in sink.log if e[0] == "state"] == [0, 5, 10]
 
 
 @pytest.mark.parametrize("mode", ["nothing"])
