@@ -27,11 +27,13 @@ the passing of time depends on the clock mode, and is one of these two classes. 
     every ``integration_step_s`` of wall time
     (:class:`~fourws_run.ticks.Pacer`), holds the latest valid driver input and command
     (:class:`~fourws_run.ticks.RealtimeAnswers`) and hands a state to the sink every
-    ``state_period_s``. A command is fresh while the state it answers is at most
-    ``command_stale_periods`` control periods old (simulation time, from the simulator's own
-    record of that state); a control tick without a fresh command applies zero rear steer and
-    is counted (``stale_commands``). ``driver_timeout_s`` of simulation time without a driver
-    input stops the run, naming the maneuver node.
+    ``state_period_s``: the state at once, the state's side publications (scene, odometry,
+    status) one per integration step after it, so no step carries them all. A command is
+    fresh while the state it answers is at most ``command_stale_periods`` control periods old
+    (simulation time, from the simulator's own record of that state); a control tick without
+    a fresh command applies zero rear steer and is counted (``stale_commands``).
+    ``driver_timeout_s`` of simulation time without a driver input stops the run, naming the
+    maneuver node.
 """
 
 from __future__ import annotations
