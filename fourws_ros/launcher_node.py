@@ -21,7 +21,6 @@ from typing import Any, Callable
 import rclpy
 from rcl_interfaces.msg import Log
 from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import qos_profile_rosout_default
 from rclpy.signals import SignalHandlerOptions
 from std_msgs.msg import String
@@ -31,6 +30,7 @@ from fourws_ros import topics
 from fourws_ros.domains import graph_env
 from fourws_ros.identity import PublisherNames, drain
 from fourws_ros.node_base import FourwsNode
+from fourws_ros.runtime import make_executor
 from fourws_run.verdict import ManeuverReport, SimReport
 
 Role = topics.Role
@@ -160,8 +160,8 @@ class LauncherNode:
                     os.environ.pop(key, None)
                 else:
                     os.environ[key] = value
-        # message info (publisher identity) needs the single-threaded executor
-        self.executor = SingleThreadedExecutor(context=self.context)
+        # message info (publisher identity): rclpy's single-threaded executor or the lean one
+        self.executor = make_executor(self.context, message_info=True)
         self.executor.add_node(self.node)
         self.state = state
         self.writers = writers
