@@ -83,7 +83,7 @@ class ControllerNode(FourwsNode):
     """Rear-steer controller (see module docstring)."""
 
     #: Driver inputs are taken from the run's maneuver node only, told by the publisher of
-    #: each message (rclpy message info: the single-threaded executor, fourws_ros.runtime).
+    #: each message (rclpy message info: the lean executor, fourws_ros.runtime).
     needs_message_info = True
 
     def __init__(self, node_name: str = "fourws_controller") -> None:

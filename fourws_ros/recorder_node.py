@@ -107,8 +107,8 @@ class RecorderNode(FourwsNode):
         Close the bag and exit once the run ended and every message is stored.
     """
 
-    #: run_node: this node needs message info (publisher identity), so it spins with rclpy's
-    #: single-threaded executor (the events executor does not deliver it).
+    #: run_node: this node needs message info (publisher identity), so it spins the lean
+    #: executor (fourws_ros.lean_executor; the events executor does not deliver it).
     needs_message_info = True
 
     def __init__(self) -> None:

@@ -280,7 +280,9 @@ def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
 def test_controller_that_stops_answering_fails_the_run(tmp_path):
     """A controller stopped (SIGSTOP) mid-run: lockstep waits for its answer, never runs a tick
     on anything else, and after answer_timeout_s (2 s here) the run fails naming the
-    controller; the bag holds the run up to there, each tick with its command."""
+    controller; the bag holds the run up to there, each tick with its command (and at most
+    the command the controller was sending when it was stopped: a SIGSTOP can land between a
+    write's delivery to the recorder and its delivery to the simulator)."""
     def freeze_controller(group):
         group.child("fourws_controller").proc.send_signal(signal.SIGSTOP)
 
@@ -292,7 +294,14 @@ def test_controller_that_stops_answering_fails_the_run(tmp_path):
     bag = load_bag(run.bag_path, allow_incomplete=True)
     state = bag.topics[topics.STATE]
     cmds = bag.topics[topics.REAR_STEER_CMD]
-    assert len(state) == len(cmds) + 1  # every tick that ran had its command
+    ticks = run.control_ticks  # the ticks that ran, each on its command
+    assert ticks > 0 and len(state) == ticks + 1  # and the state awaiting the answer
+    status = bag.topics[topics.SIM_STATUS].fields
+    assert status["final"][-1] and status["commands_accepted"][-1] == ticks
+    assert ticks <= len(cmds) <= ticks + 1
+    # each command answers the state of its tick, in order (10 steps of 1 ms per 10 ms tick)
+    np.testing.assert_array_equal(cmds.fields["state_step"], 10 * np.arange(len(cmds)))
+    np.testing.assert_array_equal(state.fields["step"][:len(cmds)], cmds.fields["state_step"])
     assert run.exit_codes["fourws_controller"] is not None  # the stopped process was ended
 
 
