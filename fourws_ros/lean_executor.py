@@ -212,12 +212,16 @@ class LeanExecutor(SingleThreadedExecutor):
                                        clock_type=tmr.clock.clock_type)})
 
     @staticmethod
-    def _run_subscription(sub: Any) -> None:
+    def _take(entity: Any, take: Callable[[Any], Any]) -> Any:
+        """``take(handle)`` with the entity's handle held; None if the entity is destroyed."""
         try:
-            with sub.handle:
-                taken = sub.handle.take_message(sub.msg_type, sub.raw)
+            with entity.handle:
+                return take(entity.handle)
         except InvalidHandle:
-            return
+            return None
+
+    def _run_subscription(self, sub: Any) -> None:
+        taken = self._take(sub, lambda h: h.take_message(sub.msg_type, sub.raw))
         if taken is None:
             return
         if sub._callback_type is _MESSAGE_ONLY:
@@ -226,11 +230,8 @@ class LeanExecutor(SingleThreadedExecutor):
             sub.callback(*taken)
 
     def _run_client(self, cli: Any) -> None:
-        try:
-            with cli.handle:
-                header, response = cli.handle.take_response(cli.srv_type.Response)
-        except InvalidHandle:
-            return
+        header, response = self._take(
+            cli, lambda h: h.take_response(cli.srv_type.Response)) or (None, None)
         if header is None:
             return
         try:
@@ -240,13 +241,9 @@ class LeanExecutor(SingleThreadedExecutor):
         future._set_executor(self)
         future.set_result(response)
 
-    @staticmethod
-    def _run_service(srv: Any) -> None:
-        try:
-            with srv.handle:
-                request, header = srv.handle.service_take_request(srv.srv_type.Request)
-        except InvalidHandle:
-            return
+    def _run_service(self, srv: Any) -> None:
+        request, header = self._take(
+            srv, lambda h: h.service_take_request(srv.srv_type.Request)) or (None, None)
         if header is None:
             return
         response = srv.callback(request, srv.srv_type.Response())

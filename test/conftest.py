@@ -107,6 +107,20 @@ def ros_domain(monkeypatch: pytest.MonkeyPatch):
         lease.release()
 
 
+@pytest.fixture
+def rclpy_context():
+    """An rclpy context of the test's own (use with :func:`ros_domain`), shut down after."""
+    import rclpy
+    from rclpy.context import Context
+
+    ctx = Context()
+    rclpy.init(args=[], context=ctx)
+    try:
+        yield ctx
+    finally:
+        ctx.try_shutdown()
+
+
 #: A test running this long is ended with the whole session, every thread's stack printed: the
 #: C-level watchdog of :mod:`faulthandler` (pytest.ini's ``timeout`` fails a test earlier, but
 #: through a Python handler, which never runs while the main thread is blocked in C).

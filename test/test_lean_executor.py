@@ -15,19 +15,6 @@ import pytest
 pytestmark = pytest.mark.usefixtures("ros_domain")
 
 
-@pytest.fixture
-def context():
-    import rclpy
-    from rclpy.context import Context
-
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    try:
-        yield ctx
-    finally:
-        ctx.try_shutdown()
-
-
 def _spin_until(executors, predicate, timeout_s: float = 20.0) -> bool:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
@@ -131,13 +118,13 @@ def _scenario(ctx, executor_class, waitable: bool = False, coroutine: bool = Fal
     return sorted(trace, key=repr), executor, peer_ex
 
 
-def test_lean_executor_calls_what_rclpy_calls_with_the_same_arguments(context):
+def test_lean_executor_calls_what_rclpy_calls_with_the_same_arguments(rclpy_context):
     from rclpy.executors import SingleThreadedExecutor
 
     from fourws_ros.lean_executor import LeanExecutor
 
-    expected, _, _ = _scenario(context, SingleThreadedExecutor)
-    got, lean, peer = _scenario(context, LeanExecutor)
+    expected, _, _ = _scenario(rclpy_context, SingleThreadedExecutor)
+    got, lean, peer = _scenario(rclpy_context, LeanExecutor)
     assert got == expected
     # 3 messages each of three topics, the guard, the parameter set, the TimerInfo timer
     assert len(got) == 12
@@ -151,19 +138,19 @@ def test_lean_executor_calls_what_rclpy_calls_with_the_same_arguments(context):
 
 
 @pytest.mark.parametrize("case", ["waitable", "coroutine"])
-def test_lean_executor_leaves_what_it_does_not_handle_to_rclpy(context, case):
+def test_lean_executor_leaves_what_it_does_not_handle_to_rclpy(rclpy_context, case):
     from rclpy.executors import SingleThreadedExecutor
 
     from fourws_ros.lean_executor import LeanExecutor
 
     kwargs = {case: True}
-    expected, _, _ = _scenario(context, SingleThreadedExecutor, **kwargs)
-    got, lean, _ = _scenario(context, LeanExecutor, peer_lean=False, **kwargs)
+    expected, _, _ = _scenario(rclpy_context, SingleThreadedExecutor, **kwargs)
+    got, lean, _ = _scenario(rclpy_context, LeanExecutor, peer_lean=False, **kwargs)
     assert got == expected and len(got) == 12
     assert lean.rclpy_wakeups > 0 and lean.lean_wakeups == 0
 
 
-def test_lean_executor_returns_on_shutdown_and_on_a_context_shut_down(context):
+def test_lean_executor_returns_on_shutdown_and_on_a_context_shut_down(rclpy_context):
     import threading
 
     import rclpy
@@ -174,8 +161,8 @@ def test_lean_executor_returns_on_shutdown_and_on_a_context_shut_down(context):
     from fourws_ros.lean_executor import LeanExecutor
     from fourws_ros.node_base import FourwsNode
 
-    node = FourwsNode("lean_idle", context=context)
-    executor = LeanExecutor(context=context)
+    node = FourwsNode("lean_idle", context=rclpy_context)
+    executor = LeanExecutor(context=rclpy_context)
     executor.add_node(node)
     threading.Timer(0.3, executor.shutdown).start()
     start = time.monotonic()

@@ -28,19 +28,6 @@ pytestmark = pytest.mark.usefixtures("ros_domain")
 
 
 # ----------------------------------------------------------------------------- helpers
-@pytest.fixture
-def rclpy_context():
-    import rclpy
-    from rclpy.context import Context
-
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    try:
-        yield ctx
-    finally:
-        ctx.try_shutdown()
-
-
 def _spin_until(executor, predicate, timeout_s: float) -> bool:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
