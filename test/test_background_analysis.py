@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -19,6 +20,7 @@ import pytest
 
 from fourws_cli import cmd_demo
 from fourws_cli.background_analysis import NICENESS, BackgroundAnalysis
+from fourws_cli.background_analysis import niceness as _nice
 from fourws_cli.main import main
 from fourws_sim.params import vehicle_from_mapping
 
@@ -184,12 +186,38 @@ def test_the_report_process_does_not_outlive_a_killed_demo(tmp_path: Path) -> No
             os.kill(worker, signal.SIGKILL)
 
 
-def _nice(pid: int) -> int | None:
-    """The niceness of ``pid`` (/proc/PID/stat field 19), None if it has gone."""
+def test_the_report_process_is_back_at_the_demos_niceness_when_the_demo_waits(
+        tmp_path: Path) -> None:
+    """Niced while the runs go on, the worker takes the demo's niceness back when the demo
+    starts waiting for the report, even while it still analyses an earlier bag; where
+    lowering a niceness is not permitted it stays nice and still writes the report."""
+    permitted = subprocess.run(
+        [sys.executable, "-c", "import os; base = os.getpriority(os.PRIO_PROCESS, 0); "
+         "os.nice(1); os.setpriority(os.PRIO_PROCESS, 0, base)"]).returncode == 0
+    base = os.getpriority(os.PRIO_PROCESS, 0)
+    _step_bag(tmp_path / "a")
+    worker = BackgroundAnalysis([str(tmp_path / "a"), "--report", str(tmp_path / "rep"),
+                                 "--quiet"])
+    pid = worker._proc.pid
     try:
-        return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[16])
-    except OSError:
-        return None
+        worker.add(str(tmp_path / "a"))
+        deadline = time.monotonic() + 120  # (a bound on a hang, not a speed)
+        while _nice(pid) != base + NICENESS and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert _nice(pid) == base + NICENESS
+        codes: list[int | None] = []
+        waiting = threading.Thread(target=lambda: codes.append(worker.finish()))
+        waiting.start()
+        seen = set()
+        # the worker is alive until it has written the report and answered
+        while waiting.is_alive():
+            seen.add(_nice(pid))
+        assert codes == [0]
+    finally:
+        worker.close()
+    assert (tmp_path / "rep" / "metrics.json").is_file()
+    seen.discard(None)
+    assert (base in seen) if permitted else (seen == {base + NICENESS})
 
 
 def _alive(pid: int) -> bool:
