@@ -37,7 +37,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from fourws_cli import cmd_analyze
-from fourws_ros.oslevel import PR_SET_PDEATHSIG, is_stopped, prctl
+from fourws_ros.oslevel import PR_SET_PDEATHSIG, is_stopped, niceness, prctl
 from fourws_sim.errors import FourwsError, one_line
 
 #: The worker's niceness increment (``os.nice``).
@@ -99,16 +99,6 @@ def _serve(conn: Any, argv: list[str]) -> None:
         _answer(conn, "failed", f"its arguments were refused (exit code {exc.code})")
     except Exception:  # noqa: BLE001 - the demo analyses in its own process instead
         _answer(conn, "failed", traceback.format_exc(limit=-1).strip().splitlines()[-1])
-
-
-def niceness(pid: int) -> int | None:
-    """The niceness of process ``pid`` (its main thread: /proc/PID/stat field 19), None if it
-    has gone."""
-    try:
-        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as f:
-            return int(f.read().rsplit(")", 1)[1].split()[16])
-    except (OSError, IndexError, ValueError):
-        return None
 
 
 def _restore_priority(base: int) -> None:

@@ -88,19 +88,14 @@ class LeanExecutor(SingleThreadedExecutor):
             node_subs, node_timers = list(node.subscriptions), list(node.timers)
             node_services, node_guards = list(node.services), list(node.guards)
             node_clients = list(node.clients)
-            for entity in node_clients:
-                if entity.callback_group is not None and \
-                        not entity.callback_group.can_execute(entity):
-                    return None
-            for entity in (*node_subs, *node_timers, *node_services, *node_guards):
+            for entity in (*node_subs, *node_timers, *node_clients, *node_services,
+                           *node_guards):
                 group = entity.callback_group
                 if group is not None and not group.can_execute(entity):
                     return None
-                callback = entity.callback
-                if callback is None:
-                    if entity in node_subs:
-                        return None
-                elif not self._is_plain(callback):
+                # a client has no callback (its futures get the responses)
+                callback = getattr(entity, "callback", None)
+                if callback is not None and not self._is_plain(callback):
                     return None
             subs.extend(node_subs)
             timers.extend(node_timers)

@@ -21,13 +21,30 @@ def prctl(option: int, value: int) -> bool:
         return False
 
 
+def _stat_fields(pid: int) -> list[str]:
+    """The fields of ``/proc/PID/stat`` after the command name (field 3, the state, first);
+    empty if the process has gone."""
+    try:
+        # the command name may hold any bytes; the fields after it are ASCII
+        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as f:
+            return f.read().rsplit(")", 1)[-1].split()
+    except OSError:
+        return []
+
+
 def is_stopped(pid: int) -> bool:
     """Process ``pid`` is stopped (SIGSTOP/SIGTSTP, state T or t in ``/proc/PID/stat``)."""
+    return _stat_fields(pid)[:1] in (["T"], ["t"])
+
+
+def niceness(pid: int) -> int | None:
+    """The niceness of process ``pid`` (its main thread: ``/proc/PID/stat`` field 19), None
+    if it has gone."""
+    fields = _stat_fields(pid)
     try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().rsplit(")", 1)[-1].split()[0] in ("T", "t")
-    except (OSError, IndexError):
-        return False
+        return int(fields[16])
+    except (IndexError, ValueError):
+        return None
 
 
 def node_prefix() -> list[str]:
@@ -35,4 +52,5 @@ def node_prefix() -> list[str]:
     return [sys.executable, "-m", "fourws_cli.main", "node"]
 
 
-__all__ = ["PR_SET_CHILD_SUBREAPER", "PR_SET_PDEATHSIG", "is_stopped", "node_prefix", "prctl"]
+__all__ = ["PR_SET_CHILD_SUBREAPER", "PR_SET_PDEATHSIG", "is_stopped", "niceness", "node_prefix",
+           "prctl"]

@@ -20,7 +20,7 @@ import pytest
 
 from fourws_cli import cmd_demo
 from fourws_cli.background_analysis import NICENESS, BackgroundAnalysis
-from fourws_cli.background_analysis import niceness as _nice
+from fourws_ros.oslevel import niceness as _nice
 from fourws_cli.main import main
 from fourws_sim.params import vehicle_from_mapping
 

@@ -35,7 +35,6 @@ def _scenario(ctx, executor_class, waitable: bool = False, coroutine: bool = Fal
     from rclpy.event_handler import SubscriptionEventCallbacks
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.serialization import deserialize_message
-    from rclpy.subscription import MessageInfo  # noqa: F401 -- annotation below
     from rclpy.timer import TimerInfo
     from std_msgs.msg import String
 
