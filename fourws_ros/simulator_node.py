@@ -83,8 +83,8 @@ class SimulatorNode(FourwsNode):
     """Vehicle simulator (see module docstring)."""
 
     #: Parameters that may change while the node runs (validated, cached in ``_cfg``).
-    _LIVE = ("viz_period_s", "status_period_s", "answer_timeout_s", "driver_timeout_s",
-             "initial_speed_mps", "command_stale_periods")
+    _LIVE = ("viz_period_s", "status_period_s", "answer_timeout_s", "recorder_timeout_s",
+             "driver_timeout_s", "initial_speed_mps", "command_stale_periods")
 
     def __init__(self) -> None:
         super().__init__("fourws_simulator")
@@ -215,7 +215,9 @@ class SimulatorNode(FourwsNode):
                               window=FlowWindow(int(self._param("recorder_window")),
                                                 FLOW_TOPICS),
                               sent_counts=self._sent_counts,
-                              answer_timeout_s=lambda: float(self._cfg["answer_timeout_s"]))
+                              answer_timeout_s=lambda: float(self._cfg["answer_timeout_s"]),
+                              recorder_timeout_s=lambda: float(
+                                  self._cfg["recorder_timeout_s"]))
         return make_clock("realtime", **common, state_steps=self.n_state,
                           stale_after_s=lambda: (int(self._cfg["command_stale_periods"])
                                                  * self.control_period_s),

@@ -61,6 +61,12 @@ def declare_parameters(node: Any) -> None:
                     "first state's) before the run stops as failed (no tick runs on an "
                     "input that was not sent), s",
         floating_point_range=_frange(1e-3, 3600.0)))
+    declare("recorder_timeout_s", 60.0, ParameterDescriptor(
+        description="lockstep: wall time a tick may be held for the recorder (more than "
+                    "its flow-control window behind) before the run stops as failed, s; "
+                    "apart from answer_timeout_s, since a recorder on a slow disk has not "
+                    "stopped answering",
+        floating_point_range=_frange(1e-3, 3600.0)))
     declare("command_stale_periods", 10, ParameterDescriptor(
         description="realtime: a rear-steer command is fresh while the state it answers "
                     "is at most this many control periods old (simulation time); a tick "

@@ -18,7 +18,8 @@ the passing of time depends on the clock mode, and is one of these two classes. 
     recorder window the next tick waits while the recorder is more than that many messages
     behind on a recorded topic (:class:`~fourws_run.ticks.FlowWindow`). A tick never runs on
     anything but its answers, so a loaded machine cannot change the numbers: after
-    ``answer_timeout_s`` of wall time without them the run stops as failed, naming the node.
+    ``answer_timeout_s`` of wall time without them the run stops as failed, naming the node,
+    and after ``recorder_timeout_s`` of a tick held for the recorder, naming the recorder.
 ``realtime`` (paced by the wall clock)
     The first state is published and answered as in lockstep (the wall clock starts once the
     driver input and the command of state 0 are in, so a node that is slow to start cannot
@@ -177,6 +178,10 @@ class LockstepClock(Clock):
         and the answers it accepted).
     answer_timeout_s : callable
         The current wall-time limit on a tick's answers, s (a live parameter).
+    recorder_timeout_s : callable
+        The current wall-time limit on a tick held for the recorder, s (a live parameter;
+        a separate limit, since a recorder behind on a slow disk is not a node that stopped
+        answering).
     monotonic : callable
         Wall clock, s (tests pass their own).
     """
@@ -186,12 +191,14 @@ class LockstepClock(Clock):
     def __init__(self, engine: TickEngine, sink: TickSink, limits: InputLimits,
                  window: FlowWindow, sent_counts: Callable[[], Mapping[str, int]],
                  answer_timeout_s: Callable[[], float],
+                 recorder_timeout_s: Callable[[], float],
                  monotonic: Callable[[], float] = time.monotonic) -> None:
         super().__init__(engine, sink)
         self.answers = LockstepAnswers(limits)
         self.window = window
         self._sent_counts = sent_counts
         self._timeout = answer_timeout_s
+        self._recorder_timeout = recorder_timeout_s
         self._now = monotonic
         self.held: Tick | None = None  # a tick held back by flow control
         self._held_since = 0.0
@@ -295,8 +302,9 @@ class LockstepClock(Clock):
         if not self._reported_wait and self._now() - since > LONG_WAIT_S:
             self._reported_wait = True
             self.sink.report_wait(tick.t)
-        if self.held is not None and self._now() - self._held_since > self._timeout():
-            self.sink.end(f"the recorder did not catch up within {self._timeout():g} s (wall "
+        limit = self._recorder_timeout()
+        if self.held is not None and self._now() - self._held_since > limit:
+            self.sink.end(f"the recorder did not catch up within {limit:g} s (wall "
                           f"time) at t = {self.held.t:.2f} s: it is behind on "
                           f"{self.holding_back()} by more than the flow-control window "
                           "(stopped or starved?)", True)

@@ -62,7 +62,7 @@ def _lockstep(window: int = 0, sent=None):
     limits = InputLimits(0.1, 1e5)
     clock = LockstepClock(engine, sink, limits, FlowWindow(window, ["/fourws/state"]),
                           sent_counts=sent or (lambda: {}), answer_timeout_s=lambda: 60.0,
-                          monotonic=wall)
+                          recorder_timeout_s=lambda: 90.0, monotonic=wall)
     return clock, sink, wall
 
 
@@ -122,8 +122,11 @@ def test_lockstep_held_tick_waits_for_the_recorder_then_fails():
     assert len(sink.ticks) == 6 and clock.held is not None
     wall.now = 61.0
     clock.housekeeping()
+    assert sink.ended is None  # past the answer timeout, within the recorder's
+    wall.now = 91.0
+    clock.housekeeping()
     reason, failed = sink.ended
-    assert failed and "the recorder did not catch up within 60 s" in reason
+    assert failed and "the recorder did not catch up within 90 s" in reason
 
 
 def test_realtime_starts_its_wall_clock_only_on_the_first_answers():
