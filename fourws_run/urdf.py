@@ -33,7 +33,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from xml.sax.saxutils import escape
+from html import escape  # quotes too (the name is an attribute); light: no urllib
 
 from fourws_run.interface import (FRAME_BODY, FRAME_MOUNT, FRAME_SPRUNG, FRAME_STEER,
                                   FRAME_WHEEL, WHEELS)

@@ -280,10 +280,11 @@ def test_launcher_signal_leaves_no_orphans_and_a_bag(tmp_path, sig, code):
 def test_controller_that_stops_answering_fails_the_run(tmp_path):
     """A controller stopped (SIGSTOP) mid-run: lockstep waits for its answer, never runs a tick
     on anything else, and after answer_timeout_s (2 s here) the run fails naming the
-    controller (a recorder starved beside other load holds a tick up to recorder_timeout_s,
-    60 s, not 2 s: the verdict names the missing answer, not a slow recorder); the bag holds the run up to there, each tick with its command (and at most
-    the command the controller was sending when it was stopped: a SIGSTOP can land between a
-    write's delivery to the recorder and its delivery to the simulator)."""
+    controller. (A recorder starved beside other load holds a tick up to recorder_timeout_s,
+    60 s, not 2 s: the verdict names the missing answer, not a slow recorder.) The bag holds
+    the run up to there, each tick with its command (and at most the command the controller
+    was sending when it was stopped: a SIGSTOP can land between a write's delivery to the
+    recorder and its delivery to the simulator)."""
     def freeze_controller(group):
         group.child("fourws_controller").proc.send_signal(signal.SIGSTOP)
 
