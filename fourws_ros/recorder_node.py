@@ -40,7 +40,9 @@ or of wall time, whichever comes first, and whenever it exceeds
 :data:`fourws_run.bagfile.CHUNK_BYTES`; a recorder killed later leaves every message up to the
 last flush in complete, CRC-checked chunks (``fourws bag repair`` rebuilds the bag). In
 lockstep the simulator cannot run further than the flow-control window ahead, so a killed
-recorder loses at most that window plus one flush period of data.
+recorder loses at most that window plus one flush period of data. A tick held for a recorder
+that stays behind (stopped, starved, a slow disk) fails the run after the simulator's
+``recorder_timeout_s`` of wall time, naming the recorder.
 """
 
 from __future__ import annotations
