@@ -397,10 +397,12 @@ def _warm() -> None:
     subscription or service is created, importing rosidl_generator_py the first time); and
     fill :mod:`inspect`'s module cache (rclpy's logger looks the caller's module up on every
     call, and the first look-up maps every loaded module's file)."""
-    from fourws_control.registry import LAWS
-    from fourws_ros import topics
-    from fourws_sim.models import MODELS
-    from fourws_sim.tires import TIRES
+    # numpy, rclpy: in the starter only, after it is running (the command line imports this
+    # module before it starts the starter)
+    from fourws_control.registry import LAWS  # numpy: in the starter only
+    from fourws_ros import topics  # rclpy: in the starter only
+    from fourws_sim.models import MODELS  # numpy: in the starter only
+    from fourws_sim.tires import TIRES  # numpy: in the starter only
     modules = [*NODE_INTERFACES, *TIRES.values(), *MODELS.values(),
                *{target.partition(":")[0] for target in LAWS.values()},
                *{f"{t.partition('/')[0]}.msg"
