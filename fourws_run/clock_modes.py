@@ -294,7 +294,8 @@ class LockstepClock(Clock):
     # -- the passing of wall time
     def housekeeping(self) -> None:
         """Report a long wait; stop the run once a tick's answers are later than the answer
-        timeout (a node has stopped working: lockstep never runs a tick on other inputs)."""
+        timeout (a node has stopped working: lockstep never runs a tick on other inputs), or
+        once a tick has been held for the recorder longer than the recorder timeout."""
         tick = self.answers.awaited or self.held
         if tick is None or self.paused:
             return
