@@ -201,7 +201,7 @@ class RecorderNode(FourwsNode):
         if topics.STATE in self._subs:
             self.peers.need_publishers(self._subs[topics.STATE], topics.STATE)
         self._timer = self.create_timer(STATUS_PERIOD_S, self._tick, clock=_steady_clock())
-        self._names.refresh(*self._subs)
+        self._names.refresh_changed(self._subs)
         self.get_logger().info(f"recording {len(wanted)} topics to {path}")
         self._publish_status()
 
@@ -315,7 +315,7 @@ class RecorderNode(FourwsNode):
     # ------------------------------------------------------------------ progress
     def _tick(self) -> None:
         self._check_peers()
-        self._names.refresh(*self._subs)
+        self._names.refresh_changed(self._subs)
         if self._pending:
             self._resolve_pending()
         if not self.closed and (self._status_due or time.monotonic() - self._status_at

@@ -72,3 +72,49 @@ def test_an_unnamed_publisher_is_foreign_after_the_bound(monkeypatch):
     clock[0] += 0.2
     filt.poll()
     assert taken == [] and refused == ["publisher (unknown)"]
+
+
+class _Graph:
+    """A node's view of the graph: the publishers it names per topic, and how many the
+    subscriptions have matched (the graph can lag the matching); counts its look-ups."""
+
+    def __init__(self) -> None:
+        self.named: dict[str, list[tuple[str, bytes]]] = {}
+        self.lookups: list[str] = []
+
+    def get_publishers_info_by_topic(self, topic: str) -> list:
+        self.lookups.append(topic)
+        return [type("Info", (), {"node_name": n, "endpoint_gid": list(g)})()
+                for n, g in self.named.get(topic, [])]
+
+
+class _Sub:
+    def __init__(self) -> None:
+        self.count = 0
+
+    def get_publisher_count(self) -> int:
+        return self.count
+
+
+def test_publisher_names_are_looked_up_only_when_a_topics_publishers_change():
+    """One look-up per topic whose matched publishers changed (or were not all named):
+    ten quiet periods cost none; a new publisher is named at the next period, and one the
+    graph does not name yet is asked for again until it is."""
+    graph, subs = _Graph(), {"/a": _Sub(), "/b": _Sub()}
+    names = identity.PublisherNames(graph)
+    assert names.refresh_changed(subs) == ["/a", "/b"] and len(graph.lookups) == 2
+    for _ in range(10):
+        assert names.refresh_changed(subs) == []
+    assert len(graph.lookups) == 2
+    subs["/a"].count = 1
+    graph.named["/a"] = [("fourws_simulator", RUN)]
+    assert names.refresh_changed(subs) == ["/a"]
+    assert names.name("/a", RUN) == "fourws_simulator" and len(graph.lookups) == 3
+    subs["/b"].count = 1  # matched before the graph can name it
+    assert names.refresh_changed(subs) == ["/b"]
+    assert names.refresh_changed(subs) == ["/b"]  # asked again: not named yet
+    graph.named["/b"] = [("fourws_maneuver", ROGUE)]
+    assert names.refresh_changed(subs) == ["/b"]
+    assert names.refresh_changed(subs) == []
+    assert graph.lookups == ["/a", "/b", "/a", "/b", "/b", "/b"]
+    assert names.name("/b", ROGUE) == "fourws_maneuver"

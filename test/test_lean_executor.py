@@ -178,3 +178,47 @@ def test_lean_executor_returns_on_shutdown_and_on_a_context_shut_down(rclpy_cont
     with pytest.raises(ExternalShutdownException):
         for _ in range(600):  # 30 s at most
             executor.spin_once(timeout_sec=0.05)
+
+
+def test_lean_executor_keeps_its_entities_until_a_node_changes_them(rclpy_context):
+    """The entities are gathered once, not per wake-up; a subscription created while the
+    executor spins is served, a destroyed one never called again, a timer added is run."""
+    from std_msgs.msg import String
+
+    from fourws_ros.lean_executor import LeanExecutor
+    from fourws_ros.node_base import FourwsNode
+
+    node = FourwsNode("lean_cache", context=rclpy_context)
+    executor = LeanExecutor(context=rclpy_context)
+    executor.add_node(node)
+    got: list[tuple[str, str]] = []
+    pub = node.create_publisher(String, "lean_cache_a", 10)
+    first = node.create_subscription(String, "lean_cache_a",
+                                     lambda m: got.append(("first", m.data)), 10)
+    try:
+        assert _spin_until([executor], lambda: pub.get_subscription_count() == 1)
+        executor.spin_once(timeout_sec=0.0)
+        scans = executor.entity_scans
+        assert scans == 1
+        for k in range(20):
+            pub.publish(String(data=f"m{k}"))
+            assert _spin_until([executor], lambda k=k: ("first", f"m{k}") in got)
+        # 20 messages, at least 20 wake-ups, and not one gathering of the entities
+        assert executor.lean_wakeups >= 20 and executor.entity_scans == scans
+        node.create_subscription(String, "lean_cache_a",
+                                 lambda m: got.append(("second", m.data)), 10)
+        assert _spin_until([executor], lambda: pub.get_subscription_count() == 2)
+        pub.publish(String(data="both"))
+        assert _spin_until([executor], lambda: {("first", "both"), ("second", "both")}
+                           <= set(got))
+        assert executor.entity_scans > scans
+        node.destroy_subscription(first)
+        ticks: list[int] = []
+        node.create_timer(0.01, lambda: ticks.append(1))
+        pub.publish(String(data="after"))
+        assert _spin_until([executor], lambda: ("second", "after") in got and ticks)
+        assert ("first", "after") not in got
+        assert executor.rclpy_wakeups == 0
+    finally:
+        executor.shutdown(timeout_sec=1.0)
+        node.destroy_node()
