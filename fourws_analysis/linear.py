@@ -532,9 +532,11 @@ class CriticalSpeed:
 
 def max_real_part(model_name: str, vehicle: Vehicle, law: Law | str | None,
                   speed_mps: float) -> float:
-    """Largest real part (1/s) of the closed-loop eigenvalues at ``speed_mps``."""
-    cl = closed_loop(model_name, vehicle, law, speed_mps)
-    return float(np.max(np.linalg.eigvals(cl.A).real))
+    """Largest real part (1/s) of the closed-loop eigenvalues at ``speed_mps`` (from the
+    matrices alone: a critical-speed search asks at up to 200 speeds, and the state-space
+    object of :func:`closed_loop` doubled the cost of each)."""
+    A_cl = closed_loop_matrices(model_name, vehicle, law, speed_mps)[0]
+    return float(np.max(np.linalg.eigvals(A_cl).real))
 
 
 def critical_speed(model_name: str, vehicle: Vehicle, law: Law | str | None = None,
@@ -556,8 +558,8 @@ def critical_speed(model_name: str, vehicle: Vehicle, law: Law | str | None = No
             return -max_real_part(model_name, vehicle, law_obj, u)
     elif criterion == "lyapunov":
         def margin(u: float) -> float:
-            cl = closed_loop(model_name, vehicle, law_obj, u)
-            return lyapunov_check(cl.A).margin
+            return lyapunov_check(closed_loop_matrices(model_name, vehicle, law_obj, u)[0]
+                                  ).margin
     else:
         raise ParameterError("criterion", f"must be 'eigenvalues' or 'lyapunov', got "
                              f"{criterion!r}")
