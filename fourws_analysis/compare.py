@@ -80,9 +80,6 @@ _CACHE_SIZE = 256
 _SWEEP_CACHE: Memo[linearize.EigenSweep] = Memo(_CACHE_SIZE)
 #: Level comparisons (critical speeds per model level) likewise.
 _LEVELS_CACHE: Memo[critical_speeds.LevelComparison] = Memo(_CACHE_SIZE)
-#: Open-loop 8-DOF Jacobians at straight running already computed in this process, by vehicle
-#: and speed (a run's overlays, its sampled loop and the points of a study share them).
-_JACOBIAN_CACHE: Memo[tuple[np.ndarray, np.ndarray]] = Memo(_CACHE_SIZE)
 
 
 @dataclass
@@ -303,15 +300,7 @@ def _eightdof_loop(vehicle: Any, speed_mps: float, law: Any, belief_vehicle: Any
     ``(a, b, gains, model module)``, ``delta_r = K_x x + K_u u``. ``law`` is a name (built on
     the belief vehicle with ``law_options``) or a built law."""
     mod = get_model("8dof")
-
-    def jacobians() -> tuple[np.ndarray, np.ndarray]:
-        p = mod.params_for(vehicle)
-        x0 = mod.initial_state(p, speed_mps)
-        return linearize.jacobians(linearize.model_derivatives(mod), x0,
-                                   np.zeros(len(mod.INPUT)), p)
-
-    kept = _JACOBIAN_CACHE.get(json.dumps([vehicle.cache_key(), float(speed_mps)]), jacobians)
-    a, b = (m.copy() for m in kept)  # type: ignore[union-attr]
+    a, b = linearize.straight_running_jacobians(vehicle, speed_mps, "8dof")
     law_obj = law if isinstance(law, Law) else make_law(
         law, belief_vehicle if belief_vehicle is not None else vehicle,
         **dict(law_options or {}))

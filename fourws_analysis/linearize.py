@@ -22,6 +22,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from fourws_analysis.bag import MetricUnavailableError
+from fourws_analysis.memo import Memo
 from fourws_control import Law, make_law
 from fourws_sim.models import get_model
 
@@ -151,6 +152,31 @@ class EightDofLoop:
         return ev[np.abs(ev) > tol]
 
 
+#: Open-loop Jacobians kept per model, vehicle and speed (about 9 kB each): a critical-speed
+#: search samples up to 200 speeds, the same for every law of a car (a demo's three laws, a
+#: study's points), and the run's overlays and eigenvalue sweep ask again.
+_JACOBIAN_CACHE: Memo[tuple[np.ndarray, np.ndarray]] = Memo(1024)
+
+
+def straight_running_jacobians(vehicle: Any, speed_mps: float, model: str = "8dof"
+                               ) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop Jacobians ``(A, B)`` of ``model`` (``8dof`` or ``8dof-free``) linearized by
+    :func:`jacobians` at straight running at ``speed_mps`` (m/s), new arrays each call;
+    computed once per model, vehicle and speed in this process (:data:`_JACOBIAN_CACHE`:
+    the same numbers, the finite differences are deterministic)."""
+    mod = get_model(model)
+
+    def compute() -> tuple[np.ndarray, np.ndarray]:
+        p = mod.params_for(vehicle)
+        return jacobians(model_derivatives(mod), mod.initial_state(p, speed_mps),
+                         np.zeros(len(mod.INPUT)), p)
+
+    key = f"{model}|{float(speed_mps)!r}|{vehicle.cache_key()}"
+    kept = _JACOBIAN_CACHE.get(key, compute)
+    assert kept is not None  # (compute returns the matrices or raises)
+    return kept[0].copy(), kept[1].copy()
+
+
 def eightdof_loop(vehicle: Any, speed_mps: float, law: Any = "fws",
                   belief_vehicle: Any = None, law_options: Mapping[str, Any] | None = None,
                   free_steering: bool = False) -> EightDofLoop:
@@ -160,9 +186,7 @@ def eightdof_loop(vehicle: Any, speed_mps: float, law: Any = "fws",
     ``law_options``) or a built :class:`fourws_control.Law`."""
     name = "8dof-free" if free_steering else "8dof"
     mod = get_model(name)
-    p = mod.params_for(vehicle)
-    a, b = jacobians(model_derivatives(mod), mod.initial_state(p, speed_mps),
-                     np.zeros(len(mod.INPUT)), p)
+    a, b = straight_running_jacobians(vehicle, speed_mps, name)
     law_obj = law if isinstance(law, Law) else make_law(
         law, belief_vehicle if belief_vehicle is not None else vehicle,
         **dict(law_options or {}))

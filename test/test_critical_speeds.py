@@ -140,3 +140,30 @@ def test_levels_a_vehicle_lacks_are_named_not_computed(capsys):
         assert "no roll" in levels[level]["unavailable"]
         assert levels[level]["critical_speed_mps"] is None
     assert data["why_they_differ"] == []
+
+
+def test_the_laws_of_one_car_share_its_8dof_jacobians(monkeypatch):
+    """The 8-DOF critical-speed search of a second law on the same car linearizes at no
+    speed the first search sampled (the open-loop Jacobians do not depend on the law), and
+    finds the same speed as a search that computes every Jacobian anew."""
+    from fourws_analysis import linearize
+    from fourws_analysis.memo import Memo
+
+    car = load_vehicle("table_8_1")
+    calls: list[int] = []
+    real = linearize.jacobians
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(linearize, "jacobians", counted)
+    monkeypatch.setattr(linearize, "_JACOBIAN_CACHE", Memo(1024))
+    first = cs.critical_speed("8dof-lin", car, "sol1")
+    sampled = len(calls)
+    assert first.critical_speed_mps is None and sampled == 200  # stable over the whole grid
+    second = cs.critical_speed("8dof-lin", car, "rwc2_3dof")
+    assert len(calls) == sampled and second.critical_speed_mps is None
+    fws_kept = cs.critical_speed("8dof-lin", car, "fws").critical_speed_mps
+    monkeypatch.setattr(linearize, "_JACOBIAN_CACHE", Memo(1))
+    assert cs.critical_speed("8dof-lin", car, "fws").critical_speed_mps == fws_kept
