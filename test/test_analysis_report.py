@@ -435,6 +435,34 @@ def test_legends_stay_off_the_data_and_do_not_repeat(figures: dict, figure: str)
             assert label != f"{head} ({head})", label
 
 
+@pytest.mark.parametrize("laws", [("fws",), ("fws", "sol1")])
+def test_figure_texts_lie_inside_the_figure(engineer: dict, laws: tuple[str, ...]) -> None:
+    """Every legend and title of the figures lies inside the figure, also with a single law
+    (one eigenvalue panel, 6.8 in wide: its title and 4-column legend had run off both
+    edges), and no legend covers a plotting area."""
+    import matplotlib.pyplot as plt
+
+    runs = [r for r in engineer["runs"] if r.name.split("-")[-1] in laws]
+    assert {r.name.split("-")[-1] for r in runs} == set(laws)
+    for name in ("time_histories", "step", "eigenvalues"):
+        fig = getattr(RF, f"figure_{name}")(runs)
+        fig.canvas.draw()
+        frame = fig.bbox
+        texts = [*_legends(fig), *([fig._suptitle] if fig._suptitle else []),
+                 *(ax.title for ax in fig.axes), *(ax._left_title for ax in fig.axes)]
+        for text in texts:
+            box = text.get_window_extent()
+            if box.width == 0:
+                continue  # an empty title
+            assert (box.x0 >= frame.x0 - 1 and box.x1 <= frame.x1 + 1
+                    and box.y0 >= frame.y0 - 1 and box.y1 <= frame.y1 + 1), (name, laws)
+        for legend in _legends(fig):
+            for ax in fig.axes:
+                if ax.get_label() != "<colorbar>":
+                    assert not legend.get_window_extent().overlaps(ax.get_window_extent())
+        plt.close(fig)
+
+
 def test_bode_phase_lines_never_jump(figures: dict) -> None:
     """In every phase panel of the Bode figure, neighbouring drawn points differ by at most
     PHASE_BREAK_DEG (90 deg; a wrap is 360, and any jump over 180 is a branch artefact); the
