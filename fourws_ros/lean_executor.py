@@ -70,6 +70,11 @@ class LeanExecutor(SingleThreadedExecutor):
         #: Times the nodes' entities were gathered (the cache below missed).
         self.entity_scans = 0
         self._entities: tuple[list, list, list, list, list] | None = None
+        # changes signalled (wake, add_node, remove_node) and the count the entities were
+        # gathered at: a change while they are being gathered (another thread creating an
+        # entity) leaves the counts apart, so they are gathered again
+        self._changes = 0
+        self._gathered_at = -1
         self._plain: dict[int, bool] = {}  # id(callback) -> a plain (non-coroutine) function
         self._timer_args: dict[int, str | None] = {}
 
@@ -86,23 +91,25 @@ class LeanExecutor(SingleThreadedExecutor):
 
     def wake(self) -> None:
         """rclpy's wake-up on a created or destroyed entity: the entities are gathered again."""
-        self._entities = None
+        self._changes += 1
         super().wake()
 
     def add_node(self, node: Any) -> bool:  # noqa: D102 - rclpy's, the entities gathered again
-        self._entities = None
+        self._changes += 1
         return super().add_node(node)
 
     def remove_node(self, node: Any) -> None:  # noqa: D102 - rclpy's, as add_node
-        self._entities = None
+        self._changes += 1
         super().remove_node(node)
 
     def _lean_entities(self) -> tuple[list, list, list, list, list] | None:
         """The nodes' subscriptions, timers, clients, services and guard conditions, as last
         gathered while nothing changed since; None where one needs rclpy's own path."""
-        if self._entities is None:
+        changes = self._changes
+        if self._gathered_at != changes:
             self.entity_scans += 1
             self._entities = self._gather()
+            self._gathered_at = changes
         return self._entities
 
     def _gather(self) -> tuple[list, list, list, list, list] | None:
@@ -139,7 +146,7 @@ class LeanExecutor(SingleThreadedExecutor):
         entities = self._lean_entities()
         if entities is None or self._is_shutdown:
             self.rclpy_wakeups += 1
-            self._entities = None  # its tasks and callback groups: gathered again next time
+            self._gathered_at = -1  # its tasks and callback groups: gathered again next time
             super()._spin_once_impl(timeout_sec, wait_condition)
             return
         self.lean_wakeups += 1

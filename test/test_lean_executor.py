@@ -222,3 +222,38 @@ def test_lean_executor_keeps_its_entities_until_a_node_changes_them(rclpy_contex
     finally:
         executor.shutdown(timeout_sec=1.0)
         node.destroy_node()
+
+
+def test_an_entity_created_while_the_executor_gathers_is_not_missed(rclpy_context, monkeypatch):
+    """A subscription created (by another thread) while the executor is gathering the
+    entities, after it has read the node's list: the next wake-up gathers them again and
+    serves the new subscription (the lists gathered before the change are not kept)."""
+    from std_msgs.msg import String
+
+    from fourws_ros.lean_executor import LeanExecutor
+    from fourws_ros.node_base import FourwsNode
+
+    node = FourwsNode("lean_race", context=rclpy_context)
+    executor = LeanExecutor(context=rclpy_context)
+    executor.add_node(node)
+    got: list[str] = []
+    pub = node.create_publisher(String, "lean_race_a", 10)
+    gather = executor._gather
+    created: list = []
+
+    def gather_then_create():
+        found = gather()  # the lists as they were
+        if not created:  # the other thread's creation lands here, once
+            created.append(node.create_subscription(String, "lean_race_a",
+                                                    lambda m: got.append(m.data), 10))
+        return found
+
+    monkeypatch.setattr(executor, "_gather", gather_then_create)
+    try:
+        assert _spin_until([executor], lambda: pub.get_subscription_count() == 1)
+        pub.publish(String(data="seen"))
+        assert _spin_until([executor], lambda: "seen" in got)
+        assert executor.entity_scans >= 2
+    finally:
+        executor.shutdown(timeout_sec=1.0)
+        node.destroy_node()
