@@ -40,6 +40,10 @@ integration_step_s, state_period_s, clock_mode
     continue the simulator's sequence are refused (:class:`fourws_run.ticks.StateGate`).
 exit_when_done : bool
     Exit once the simulator's final status arrived and everything published is delivered.
+simulator_node, maneuver_node : str
+    The run's simulator and driver nodes: states and driver inputs of any other publisher
+    are refused and counted (a foreign state on the run's clock would steer the law, a
+    foreign driver input on a state's stamp would be its feed-forward); read-only.
 
 The node publishes what it runs with on ``/fourws/node_config`` (law, options, belief,
 actuator limits), again after every accepted law change.
@@ -58,7 +62,7 @@ from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor, SetPara
 
 from fourws_control import RearSteerActuator, available_laws, make_loop_law
 from fourws_ros import conversions, peers, reporting, topics
-from fourws_ros.identity import PublisherNames, RunNodeFilter, drain
+from fourws_ros.identity import run_node_filter, subscribe_from
 from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import EXIT_PEERS, run_node
 from fourws_run import codecs
@@ -82,8 +86,9 @@ def _float_range(lo: float, hi: float) -> list[FloatingPointRange]:
 class ControllerNode(FourwsNode):
     """Rear-steer controller (see module docstring)."""
 
-    #: Driver inputs are taken from the run's maneuver node only, told by the publisher of
-    #: each message (rclpy message info: the lean executor, fourws_ros.runtime).
+    #: States are taken from the run's simulator node only and driver inputs from its
+    #: maneuver node only, told by the publisher of each message (rclpy message info: the
+    #: lean executor, fourws_ros.runtime).
     needs_message_info = True
 
     def __init__(self, node_name: str = "fourws_controller") -> None:
@@ -138,6 +143,11 @@ class ControllerNode(FourwsNode):
             description="the run's driver node: driver inputs of any other publisher are "
                         "refused (a foreign one on the state's stamp would be the law's "
                         "feed-forward)", read_only=True))
+        self.declare_parameter("simulator_node", topics.NODE_NAMES[topics.Role.SIMULATOR],
+                               ParameterDescriptor(
+            description="the run's simulator node: states of any other publisher are refused "
+                        "(a foreign state on the run's clock would steer the law)",
+            read_only=True))
         self.declare_parameter("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
             description="wall time to wait for the simulator's states before giving up with "
                         "a line naming what is missing, s (0: wait forever)", read_only=True,
@@ -162,23 +172,20 @@ class ControllerNode(FourwsNode):
         self._publish_config()
         self.matched = reporting.match_wait(self, self.counts)
         self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
-                                 self._on_sim_status, topics.STATUS_QOS)
+                                 self._on_sim_status, topics.STATUS_READ_QOS)
         self._recorder = reporting.RecorderWatch(self)
         self._closing = False
         self._sim_ended = False
         self.finished = False  # run_node: stop spinning
         self.stop_reason = ""  # run_node: why it gave up on its peers (exit_code)
         # raw subscriptions + fourws_run.codecs: the answer chain of lockstep runs stays short
-        state_sub = self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
-                                             self._on_state, topics.STREAM_QOS, raw=True)
+        self._run_nodes = run_node_filter(self, self.gate.rejections)
+        state_sub = subscribe_from(self, self._run_nodes, topics.STATE, "simulator_node",
+                                   self._on_state, topics.STREAM_READ_QOS)
         self.peers = peers.PeerWatch(self, float(self.get_parameter("startup_timeout_s").value))
         self.peers.need_publishers(state_sub, topics.STATE)
-        self._run_nodes = RunNodeFilter(
-            PublisherNames(self), lambda role_param: str(self.get_parameter(role_param).value),
-            self._refuse_foreign)
-        self._driver_sub = self.create_subscription(
-            topics.message_class(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
-            self._on_driver_from, topics.STREAM_QOS, raw=True)
+        subscribe_from(self, self._run_nodes, topics.DRIVER_INPUT, "maneuver_node",
+                       self._on_driver, topics.STREAM_READ_QOS)
         self._cmd_encoder = codecs.RearSteerCommandEncoder(topics.FRAME_BODY)
         # admitted states not answered yet, in order: stamp ns -> (state, wall time received)
         self._states: collections.OrderedDict[int, tuple[dict[str, Any], float]] = \
@@ -322,21 +329,6 @@ class ControllerNode(FourwsNode):
             self._states.clear()  # realtime: only the latest state is worth an answer
         self._states[state["stamp_ns"]] = (state, time.monotonic())
         self._try_answer(fallback=False)
-
-    def _on_driver_from(self, raw: bytes, info: Any) -> None:
-        self._offer_driver(raw, info)
-        # the rest of the queue at once: a foreign flood on the topic would otherwise hold the
-        # run's own input behind thousands of messages, one executor wake-up each
-        drain(self._driver_sub, topics.message_class(topics.DRIVER_INPUT), True,
-              self._offer_driver, topics.STREAM_DEPTH)
-
-    def _offer_driver(self, raw: bytes, info: Any) -> None:
-        self._run_nodes.offer(topics.DRIVER_INPUT, info, "maneuver_node", raw, self._on_driver)
-
-    def _refuse_foreign(self, topic: str, detail: str) -> None:
-        self.gate.rejections.add(topic, "not from the run's node", detail)
-        self.get_logger().warning(f"refused a {topic} message: not from the run's node "
-                                  f"({detail})", throttle_duration_sec=1.0)
 
     def _on_driver(self, raw: bytes) -> None:
         try:

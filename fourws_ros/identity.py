@@ -13,6 +13,8 @@ from __future__ import annotations
 import time
 from typing import Any, Callable, Mapping
 
+from fourws_ros import topics
+
 
 def publisher_gid(info: Any) -> bytes:
     """The publisher GID (16 bytes) of rclpy message info (``b""`` if it has none)."""
@@ -163,6 +165,38 @@ class RunNodeFilter:
                     handler(raw)
 
 
+def run_node_filter(node: Any, rejections: Any) -> RunNodeFilter:
+    """A :class:`RunNodeFilter` of ``node`` whose run's node for a role is the node's parameter
+    of that name (``"simulator_node"``); a foreign message is counted in ``rejections``
+    (:class:`fourws_run.ticks.Rejections`) and said in the log, at most once a second."""
+    def refuse(topic: str, detail: str) -> None:
+        rejections.add(topic, "not from the run's node", detail)
+        node.get_logger().warning(f"refused a {topic} message: not from the run's node "
+                                  f"({detail})", throttle_duration_sec=1.0)
+    return RunNodeFilter(PublisherNames(node),
+                         lambda role_param: str(node.get_parameter(role_param).value), refuse)
+
+
+def subscribe_from(node: Any, run_nodes: RunNodeFilter, topic: str, role: str,
+                   handler: Callable[[bytes], Any], qos: Any) -> Any:
+    """A raw subscription of ``topic`` that hands ``handler(raw)`` the messages of the run's
+    node of ``role`` only (``run_nodes``). Each wake-up takes the whole queue: a foreign flood
+    would otherwise hold the run's own message behind thousands of messages, one executor
+    wake-up each. The node must spin an executor that delivers message info."""
+    msg_type = topics.message_class(topic)
+    holder: list[Any] = []
+
+    def offer(raw: bytes, info: Any) -> None:
+        run_nodes.offer(topic, info, role, raw, handler)
+
+    def callback(raw: bytes, info: Any) -> None:
+        offer(raw, info)
+        drain(holder[0], msg_type, True, offer, topics.STREAM_DEPTH)
+
+    holder.append(node.create_subscription(msg_type, topic, callback, qos, raw=True))
+    return holder[0]
+
+
 def drain(subscription: Any, msg_type: type, raw: bool,
           receive: Any, limit: int = 100_000) -> int:
     """Hand ``receive(msg, info)`` every message waiting in ``subscription``'s queue; the
@@ -182,4 +216,4 @@ def drain(subscription: Any, msg_type: type, raw: bool,
 
 
 __all__ = ["MAX_HELD", "PublisherNames", "RunNodeFilter", "UNIDENTIFIED_AFTER_S", "drain",
-           "publisher_gid"]
+           "publisher_gid", "run_node_filter", "subscribe_from"]

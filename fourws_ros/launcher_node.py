@@ -189,7 +189,7 @@ class LauncherNode:
             drain(holder[0], msg_type, False, handler)
 
         holder.append(self.node.create_subscription(msg_type, topic, callback,
-                                                    topics.STATUS_QOS))
+                                                    topics.STATUS_READ_QOS))
 
     def spin(self, seconds: float) -> None:
         """Run callbacks for up to ``seconds``."""

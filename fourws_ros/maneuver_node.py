@@ -28,6 +28,10 @@ clock_mode : str
     ``lockstep`` (every state answered, none skipped) or ``realtime``.
 exit_when_done : bool
     Exit once the maneuver is done and delivered.
+simulator_node : str
+    The run's simulator node; states of any other publisher are refused and counted (a
+    foreign state on the run's clock could otherwise take the place of the simulator's and
+    stall a lockstep run); read-only.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from typing import Any
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 
 from fourws_ros import conversions, peers, reporting, topics
+from fourws_ros.identity import run_node_filter, subscribe_from
 from fourws_ros.node_base import FourwsNode
 from fourws_ros.runtime import EXIT_PEERS, run_node
 from fourws_run import codecs
@@ -53,6 +58,10 @@ CLOCK_MODES = ("lockstep", "realtime")
 
 class ManeuverNode(FourwsNode):
     """Maneuver player (see module docstring)."""
+
+    #: States are taken from the run's simulator node only, told by the publisher of each
+    #: message (rclpy message info: the lean executor, fourws_ros.runtime).
+    needs_message_info = True
 
     def __init__(self) -> None:
         super().__init__("fourws_maneuver")
@@ -77,6 +86,11 @@ class ManeuverNode(FourwsNode):
             description="lockstep | realtime", **ro))
         self.declare_parameter("exit_when_done", True, ParameterDescriptor(
             description="exit once the maneuver is done and delivered"))
+        self.declare_parameter("simulator_node", topics.NODE_NAMES[topics.Role.SIMULATOR],
+                               ParameterDescriptor(
+            description="the run's simulator node: states of any other publisher are refused "
+                        "(a foreign state on the run's clock would take the place of the "
+                        "simulator's)", **ro))
         self.declare_parameter("startup_timeout_s", peers.STARTUP_TIMEOUT_S, ParameterDescriptor(
             description="wall time to wait for the simulator's states before giving up with "
                         "a line naming what is missing, s (0: wait forever)",
@@ -105,8 +119,9 @@ class ManeuverNode(FourwsNode):
             self, self.counts, topics.Role.MANEUVER,
             {"maneuver": self.maneuver.to_dict(), "vehicle": vehicle.name})
         # raw: the fast decoder keeps the lockstep answer chain short (fourws_run.codecs)
-        state_sub = self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
-                                             self._on_state, topics.STREAM_QOS, raw=True)
+        self._run_nodes = run_node_filter(self, self.gate.rejections)
+        state_sub = subscribe_from(self, self._run_nodes, topics.STATE, "simulator_node",
+                                   self._on_state, topics.STREAM_READ_QOS)
         self.peers = peers.PeerWatch(self, float(self.get_parameter("startup_timeout_s").value))
         self.peers.need_publishers(state_sub, topics.STATE)
         self._peer_timer = self.create_timer(0.1, self._check_peers)
@@ -118,7 +133,7 @@ class ManeuverNode(FourwsNode):
         self._held: list[dict[str, Any]] = []
         self._held_timer = self.create_timer(0.02, self._answer_held)
         self.create_subscription(topics.message_class(topics.SIM_STATUS), topics.SIM_STATUS,
-                                 self._on_sim_status, topics.STATUS_QOS)
+                                 self._on_sim_status, topics.STATUS_READ_QOS)
         self._phase = ""
         self.done = False
         self.finished = False  # run_node: stop spinning
@@ -214,6 +229,7 @@ class ManeuverNode(FourwsNode):
 
     def _check_peers(self) -> None:
         """Give up on a graph that does not come together, or whose simulator left."""
+        self._run_nodes.poll()
         if self.done:
             return
         why = (self.peers.check_startup() if self.gate.last_step is None

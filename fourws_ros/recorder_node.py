@@ -195,7 +195,7 @@ class RecorderNode(FourwsNode):
         for t in subscribed:
             self._subs[t] = self.create_subscription(
                 topics.message_class(t), t, self._make_callback(t),
-                topics.LATCHED_RECORD_QOS if t in topics.LATCHED_TOPICS else topics.TOPIC_QOS[t],
+                topics.READ_QOS[t],
                 raw=True)
         self.peers = peers.PeerWatch(self, float(self.get_parameter("startup_timeout_s").value))
         if topics.STATE in self._subs:

@@ -134,7 +134,7 @@ class ReplayNode(FourwsNode):
             self._rejections = Rejections()
             self.status_pub = self.counts.publisher(self, topics.MANEUVER_STATUS)
             self.create_subscription(topics.message_class(topics.STATE), topics.STATE,
-                                     self._on_state, topics.STREAM_QOS, raw=True)
+                                     self._on_state, topics.STREAM_READ_QOS, raw=True)
         else:
             self._t0_wall: float | None = None
             self._clock_msg = topics.message_class(topics.CLOCK)()

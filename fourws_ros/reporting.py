@@ -205,7 +205,7 @@ class RecorderWatch:
         self._heard = 0.0
         if subscribe:
             node.create_subscription(topics.message_class(topics.RECORDER_STATUS),
-                                     topics.RECORDER_STATUS, self.update, topics.STATUS_QOS)
+                                     topics.RECORDER_STATUS, self.update, topics.STATUS_READ_QOS)
 
     def update(self, msg: Any) -> None:
         """Take a ``RecorderStatus`` (the subscription calls it; a node that subscribes itself

@@ -159,14 +159,15 @@ class SimulatorNode(FourwsNode):
         realtime = self.clock_mode == "realtime"
         self.driver_sub = self.create_subscription(
             msg(topics.DRIVER_INPUT), topics.DRIVER_INPUT,
-            self._on_driver_from if realtime else self._on_driver, topics.STREAM_QOS, raw=True)
+            self._on_driver_from if realtime else self._on_driver, topics.STREAM_READ_QOS,
+            raw=True)
         self.cmd_sub = self.create_subscription(
             msg(topics.REAR_STEER_CMD), topics.REAR_STEER_CMD,
-            self._on_cmd_from if realtime else self._on_cmd, topics.STREAM_QOS, raw=True)
+            self._on_cmd_from if realtime else self._on_cmd, topics.STREAM_READ_QOS, raw=True)
         self.create_subscription(msg(topics.MANEUVER_STATUS), topics.MANEUVER_STATUS,
-                                 self._on_maneuver_status, topics.STATUS_QOS)
+                                 self._on_maneuver_status, topics.STATUS_READ_QOS)
         self.create_subscription(msg(topics.RECORDER_STATUS), topics.RECORDER_STATUS,
-                                 self._on_recorder_status, topics.STATUS_QOS)
+                                 self._on_recorder_status, topics.STATUS_READ_QOS)
         self._recorder = reporting.RecorderWatch(self, subscribe=False)
         self._recorder_seen = int(self._param("recorder_window")) == 0
         self._run_nodes = RunNodeFilter(

@@ -45,6 +45,16 @@ QoS choice (why):
 * ``/tf`` and ``/fourws/markers`` are streams of the simulator like the state (``STREAM_QOS``):
   the recorder must not miss the first transforms either. tf2's listeners and RViz subscribe
   reliable and volatile, which a transient-local writer serves too.
+* **What fourws' own nodes read with** (``READ_QOS``, ``STREAM_READ_QOS``, ``STATUS_READ_QOS``,
+  ``LATCHED_RECORD_QOS``): the topic's reliability and durability, but **keep all**. A
+  keep-last reader holds the last N messages of all its writers together (ROS topics have no
+  keys: one instance), so a foreign node flooding a topic of the run's domain pushes the run's
+  own messages out of a reader that is starved for a moment: a launcher beside two CPU hogs
+  lost the maneuver's one final status among 1000 foreign 'done' statuses and failed a good
+  run ("the simulation ended without the maneuver's end"). A keep-all reader never drops what
+  it received; when its resource limit is reached it refuses new samples, and a reliable
+  writer sends them again later, so the flood is slowed, not the run's message lost. Writers
+  stay keep last (a keep-all writer would block on a stopped reader).
 * ``DRIVE_QOS`` (``/drive``, ``/joy``: inputs from another stack or a gamepad, read by the
   fourws driver nodes): reliable, volatile, keep last 10 -- what an F1TENTH stack, the
   ``joy`` node and ``ros2 topic pub`` publish with (a reliable reader does not match a
@@ -88,12 +98,21 @@ CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STREAM_DEPTH,
 DRIVE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                        reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)
-#: What a recorder subscribes latched topics with: transient local like the publishers, but a
-#: deep history, since several nodes publish on one latched topic (``/fourws/node_config``)
-#: and a depth-1 reader would keep only the last of them.
-LATCHED_RECORD_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=STATUS_DEPTH,
-                                reliability=ReliabilityPolicy.RELIABLE,
-                                durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def keep_all(profile: QoSProfile) -> QoSProfile:
+    """``profile``'s reliability and durability with a keep-all history: what fourws' nodes
+    read the run's topics with (module docstring)."""
+    return QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=profile.reliability,
+                      durability=profile.durability)
+
+
+STREAM_READ_QOS = keep_all(STREAM_QOS)
+STATUS_READ_QOS = keep_all(STATUS_QOS)
+#: What a recorder subscribes latched topics with: transient local like the publishers, but
+#: keep all, since several nodes publish on one latched topic (``/fourws/node_config``) and a
+#: depth-1 reader would keep only the last of them.
+LATCHED_RECORD_QOS = keep_all(LATCHED_QOS)
 
 #: QoS of every topic (publishers and subscribers use the same profile).
 TOPIC_QOS: dict[str, QoSProfile] = {
@@ -115,6 +134,11 @@ TOPIC_QOS: dict[str, QoSProfile] = {
     DRIVE: DRIVE_QOS,
     JOY: DRIVE_QOS,
 }
+#: What fourws' nodes read each topic of the run with (module docstring); the external
+#: drivers' topics keep their usual keep-last 10.
+READ_QOS: dict[str, QoSProfile] = {
+    topic: (LATCHED_RECORD_QOS if qos is LATCHED_QOS else qos if qos is DRIVE_QOS
+            else keep_all(qos)) for topic, qos in TOPIC_QOS.items()}
 assert set(TOPIC_QOS) == set(TOPIC_TYPES) | set(EXTERNAL_TOPIC_TYPES)
 assert all(TOPIC_QOS[t] is LATCHED_QOS for t in LATCHED_TOPICS)
 
@@ -139,8 +163,8 @@ def message_class(topic: str) -> type:
 
 __all__ = ["CLOCK", "CLOCK_QOS", "DRIVE", "DRIVER_INPUT", "DRIVE_QOS", "EVENT_QOS", "FRAME_BODY",
            "FRAME_ODOM", "IMU", "JOY", "LATCHED_QOS", "LATCHED_RECORD_QOS", "MANEUVER_STATUS",
-           "MARKERS", "NAMESPACE", "NODE_CONFIG", "NODE_NAMES", "ODOM", "REAR_STEER_CMD",
-           "RECORDED_TOPICS", "RECORDER_STATUS", "ROBOT_DESCRIPTION", "RUN_CONFIG", "Role",
-           "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATUS_DEPTH", "STATUS_QOS",
-           "STREAM_DEPTH", "STREAM_QOS", "TF", "TF_STATIC", "TOPIC_QOS", "TOPIC_TYPES",
-           "WRITER_ROLES", "message_class"]
+           "MARKERS", "NAMESPACE", "NODE_CONFIG", "NODE_NAMES", "ODOM", "READ_QOS",
+           "REAR_STEER_CMD", "RECORDED_TOPICS", "RECORDER_STATUS", "ROBOT_DESCRIPTION",
+           "RUN_CONFIG", "Role", "SIM_STATUS", "SRV_PAUSE", "SRV_RESET", "STATE", "STATUS_DEPTH",
+           "STATUS_QOS", "STATUS_READ_QOS", "STREAM_DEPTH", "STREAM_QOS", "STREAM_READ_QOS", "TF",
+           "TF_STATIC", "TOPIC_QOS", "TOPIC_TYPES", "WRITER_ROLES", "keep_all", "message_class"]

@@ -727,7 +727,7 @@ def _maneuver_beside_a_state_source(ctx, **params):
 
     from fourws_ros.maneuver_node import ManeuverNode
 
-    man = _make_node(ManeuverNode, ctx, **params)
+    man = _make_node(ManeuverNode, ctx, simulator_node="state_source", **params)
     src = rclpy.create_node("state_source", context=ctx)
     pub = src.create_publisher(topics.message_class(topics.STATE), topics.STATE,
                                topics.STREAM_QOS)
@@ -798,6 +798,38 @@ def test_maneuver_refuses_a_non_finite_state_on_the_runs_clock(rclpy_context):
     finally:
         executor.shutdown()
         for n in (man, src):
+            n.destroy_node()
+
+
+def test_maneuver_takes_states_from_the_runs_simulator_only(rclpy_context):
+    """A foreign node publishes a state on the run's clock (step 0, t = 0, finite) and then
+    the run's simulator its own state 0. Content cannot tell them apart: before, whichever
+    came first was answered and the other refused as not after it (a foreign state one tick
+    ahead of the simulator's then stalled a lockstep run). The foreign one is refused for
+    its publisher; the simulator's is answered, once."""
+    import rclpy
+
+    man, src, pub, got, executor = _maneuver_beside_a_state_source(rclpy_context)
+    rogue = rclpy.create_node("rogue", context=rclpy_context)
+    rogue_pub = rogue.create_publisher(topics.message_class(topics.STATE), topics.STATE,
+                                       topics.STREAM_QOS)
+    executor.add_node(rogue)
+    try:
+        assert _spin_until(executor, lambda: rogue_pub.get_subscription_count() >= 1, 20.0)
+        msg = topics.message_class(topics.STATE)()
+        msg.speed_mps = 23.6
+        rogue_pub.publish(msg)
+        assert _spin_until(executor, lambda: man.gate.rejections.total == 1, 20.0)
+        pub.publish(msg)
+        assert _spin_until(executor, lambda: bool(got), 20.0)
+        _spin_until(executor, lambda: len(got) > 1, 0.5)
+        assert len(got) == 1 and got[0].header.stamp.sec == got[0].header.stamp.nanosec == 0
+        assert dict(man.gate.rejections.counts) == {
+            f"{topics.STATE}: not from the run's node": 1}
+        assert man.gate.last_step == 0
+    finally:
+        executor.shutdown()
+        for n in (man, src, rogue):
             n.destroy_node()
 
 
