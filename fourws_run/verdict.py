@@ -222,8 +222,11 @@ def conclude(record: RunRecord, config: RunConfig, sim: SimReport | None,
         record.outcome = Outcome.FAILED
         record.reason = _second_answers(ambiguous)
     elif controller:
+        # a foreign flood on the run's domain is the likely cause of a controller that fell
+        # behind: said with it (seen: a realtime run beside a rogue failed naming only the
+        # controller)
         record.outcome = Outcome.FAILED
-        record.reason = controller
+        record.reason = controller + _flooders(record.account)
     elif not config.lockstep and pace > 0.0 and record.wall_time_s > 0.0 \
             and record.realtime_factor < pace:
         record.outcome = Outcome.FAILED

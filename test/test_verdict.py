@@ -168,6 +168,28 @@ def test_realtime_stale_and_refused_commands_beyond_the_share_fail(tmp_path):
     assert rec.outcome == Outcome.FAILED and "480 of 500 commands (96.0%)" in rec.reason
 
 
+def test_a_controller_that_fell_behind_beside_a_foreign_flood_is_failed_naming_both(tmp_path):
+    """Realtime, 41 of 500 ticks without a fresh command while the recorder counted 9000
+    foreign states and 4000 foreign driver inputs: the reason names the controller and the
+    flooding publisher (seen: a realtime run beside a rogue failed naming only the
+    controller). Without foreign messages the reason is the controller's alone."""
+    from fourws_run.accounting import RunAccount
+
+    done = ManeuverReport("completed", "completed", True)
+    rec = _record(tmp_path)
+    rec.account = RunAccount({}, foreign_publishers={"/fourws/state from rogue": 9000,
+                                                     "/fourws/driver_input from rogue": 4000})
+    conclude(rec, _config("realtime"), _sim(stale_commands=41), done, False, "", None)
+    assert rec.outcome == Outcome.FAILED
+    assert rec.reason == ("the controller node (fourws_controller): 41 of 500 control ticks "
+                          "(8.2%) ran without a fresh command (zero rear steer), beyond the "
+                          "allowed 1.0% (realtime.max_stale_share); foreign messages: 9000 on "
+                          "/fourws/state from rogue, 4000 on /fourws/driver_input from rogue")
+    rec = _record(tmp_path)
+    conclude(rec, _config("realtime"), _sim(stale_commands=41), done, False, "", None)
+    assert rec.reason.endswith("(realtime.max_stale_share)")
+
+
 def test_a_realtime_run_behind_real_time_says_so_and_fails_below_the_demand(tmp_path):
     """Simulated 5 s in 6.25 s of wall time: 0.80x. Without a demand the run is ok and its
     summary line says it fell behind; with min_realtime_factor 0.95 it fails saying both
